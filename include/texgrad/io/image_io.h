@@ -1,0 +1,27 @@
+// Image file I/O (PNG 8/16-bit, JPEG, EXR, TIFF) through OpenImageIO, with the one v-flip.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+#include "texgrad/io/image.h"
+
+namespace texgrad {
+
+/// Reads an image file into texel order (row 0 = bottom). Checks that the file's content matches
+/// its extension; throws IoError / InvalidInputError naming the file on any problem.
+Image readImage(const std::filesystem::path& path);
+
+/// Decodes an image held in memory (e.g. embedded in a GLB); `name` is used in messages.
+Image readImageFromMemory(const std::vector<unsigned char>& bytes, const std::string& name);
+
+/// Writes an image atomically (temporary file in the same folder, then rename). The format
+/// defaults to image.format; it is adjusted to what the extension supports (JPEG: 8-bit).
+void writeImage(const std::filesystem::path& path, const Image& image,
+                std::optional<PixelFormat> format = std::nullopt);
+
+/// Parses "8", "16", "half", "float" into a PixelFormat; throws InvalidInputError otherwise.
+PixelFormat parsePixelFormat(const std::string& text);
+
+}  // namespace texgrad

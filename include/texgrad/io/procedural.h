@@ -1,0 +1,25 @@
+// Procedural textured meshes built in code: the built-in sample and the unit-test fixtures.
+#pragma once
+
+#include "texgrad/io/image.h"
+#include "texgrad/io/textured_mesh.h"
+
+namespace texgrad::procedural {
+
+/// Unit square [0,1]^2 in the plane z = 0 as two triangles, UV = (x * su + u0, y * sv + v0).
+TexturedMesh square(double su = 1.0, double sv = 1.0, double u0 = 0.0, double v0 = 0.0);
+/// A flat square split into two charts along x = 0.5, packed side by side in UV with a gutter:
+/// one seam of `n` edges.
+TexturedMesh twoChartSquare(int n = 4);
+/// Unit cube with one chart per face (6 charts, 12 seams edges per side), packed in a 3x2 atlas.
+TexturedMesh cube(int subdivisions = 4);
+/// Open cylinder (radius 1/(2π), height 1) cut along one generator: one chart, one seam.
+TexturedMesh cylinder(int around = 32, int along = 16);
+/// Unit sphere as a projected cube: 6 charts in a 3x2 atlas with gutters (the geodesic fixture).
+TexturedMesh cubeSphere(int subdivisions = 16);
+/// Torus with several charts and gutters: the built-in sample for the demo command.
+TexturedMesh sampleTorus();
+/// A colourful procedural texture for the sample (asymmetric so flips and seams show).
+Image sampleTexture(int width, int height);
+
+}  // namespace texgrad::procedural

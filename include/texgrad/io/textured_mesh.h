@@ -1,0 +1,48 @@
+// The in-memory textured triangle mesh every reader produces and every later stage consumes.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace texgrad {
+
+/// Index triple of a triangle (into positions or into uvs).
+using Triangle = std::array<int32_t, 3>;
+
+/// A texture referenced by the mesh file: a path on disk or bytes embedded in the asset.
+struct TextureRef {
+  std::string slot;                      ///< "baseColor", "normal", "emissive", ...
+  std::filesystem::path path;            ///< resolved absolute path, empty if embedded
+  std::vector<unsigned char> embedded;   ///< encoded image bytes (glTF bufferView / data URI)
+  std::string mimeType;                  ///< e.g. "image/png" for embedded images
+};
+
+/// Triangle mesh with per-corner texture coordinates (OBJ-style separate index spaces).
+///
+/// positions are welded 3-D vertices (seams are recovered from them); uvs are texture
+/// coordinates with v measured upward (OBJ/glTF-after-flip convention, DESIGN.md §2).
+/// triangles[f] and uvTriangles[f] index the corners of face f in the same order.
+struct TexturedMesh {
+  std::vector<Eigen::Vector3d> positions;  ///< 3-D vertex positions (welded)
+  std::vector<Eigen::Vector2d> uvs;        ///< texture coordinates, unit square = atlas
+  std::vector<Triangle> triangles;         ///< per face: indices into positions
+  std::vector<Triangle> uvTriangles;       ///< per face: indices into uvs
+  std::vector<TextureRef> textures;        ///< textures the file references, by slot
+  std::filesystem::path sourcePath;        ///< file it was read from (empty if procedural)
+
+  /// Number of faces.
+  size_t faceCount() const { return triangles.size(); }
+  /// Texture reference for a slot ("baseColor", "normal", ...), if the file names one.
+  const TextureRef* texture(std::string_view slot) const {
+    for (const auto& t : textures)
+      if (t.slot == slot) return &t;
+    return nullptr;
+  }
+};
+
+}  // namespace texgrad
