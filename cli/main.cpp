@@ -1,10 +1,25 @@
-// Entry point of the `texgrad` command: parses subcommands and turns errors into one clear line.
+// Entry point of the `texgrad` command: registers subcommands; errors become one clear line.
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "commands.h"
+
+int texgrad::cli::exitStatus = 0;
+
 int main(int argc, char** argv) {
-  CLI::App app{"texgrad: gradient-domain processing of surface signals inside a texture atlas"};
+  CLI::App app{
+      "texgrad: gradient-domain processing of surface signals inside a texture atlas.\n"
+      "Meshes: .obj (+.mtl), .ply, .gltf, .glb, or builtin:NAME for a procedural mesh."};
+  app.set_version_flag("--version", "texgrad 0.1.0");
   app.require_subcommand(1);
-  CLI11_PARSE(app, argc, argv);
-  return 0;
+  app.fallthrough(false);
+  texgrad::cli::addInfoCommand(app);
+  texgrad::cli::addMaskCommand(app);
+  texgrad::cli::addSampleCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  return texgrad::cli::exitStatus;
 }

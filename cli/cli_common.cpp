@@ -1,0 +1,117 @@
+// Shared plumbing of the `texgrad` subcommands (argument parsing, error line, progress bar).
+#include "cli_common.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+#include <new>
+#include <regex>
+
+#include "texgrad/core/error.h"
+#include "texgrad/io/image_io.h"
+#include "texgrad/io/mesh_reader.h"
+#include "texgrad/io/procedural.h"
+
+namespace texgrad::cli {
+namespace {
+
+constexpr std::string_view kBuiltinPrefix = "builtin:";
+constexpr int kSampleTextureSize = 1024;
+constexpr int kProgressBarWidth = 40;
+
+bool isBuiltin(const std::string& spec) { return spec.rfind(kBuiltinPrefix, 0) == 0; }
+
+}  // namespace
+
+std::string builtinMeshNames() { return "sample, sphere, cube, cylinder, square, two-charts"; }
+
+TexturedMesh loadMesh(const std::string& spec, double weldTolerance) {
+  if (!isBuiltin(spec)) {
+    MeshReadOptions options;
+    options.weldTolerance = weldTolerance;
+    options.validate();
+    return readMesh(spec, options);
+  }
+  const std::string name = spec.substr(kBuiltinPrefix.size());
+  if (name == "sample") return procedural::sampleTorus();
+  if (name == "sphere") return procedural::cubeSphere();
+  if (name == "cube") return procedural::cube();
+  if (name == "cylinder") return procedural::cylinder();
+  if (name == "square") return procedural::square();
+  if (name == "two-charts") return procedural::twoChartSquare();
+  throw InvalidInputError("unknown built-in mesh '" + spec + "'; use builtin:NAME with NAME one of " +
+                          builtinMeshNames());
+}
+
+Image loadTexture(const TexturedMesh& mesh, const std::string& meshSpec,
+                  const std::string& explicitPath, const std::string& slot) {
+  if (!explicitPath.empty()) return readImage(explicitPath);
+  if (const TextureRef* ref = mesh.texture(slot)) {
+    if (!ref->path.empty()) return readImage(ref->path);
+    return readImageFromMemory(ref->embedded, meshSpec + " (embedded " + slot + " texture)");
+  }
+  if (isBuiltin(meshSpec)) return procedural::sampleTexture(kSampleTextureSize, kSampleTextureSize);
+  throw InvalidInputError(meshSpec + " references no " + slot +
+                          " texture; pass the texture file as an argument");
+}
+
+std::pair<int, int> parseResolution(const std::string& text) {
+  static const std::regex pattern(R"((\d{1,6})(?:[xX](\d{1,6}))?)");
+  std::smatch match;
+  if (!std::regex_match(text, match, pattern))
+    throw InvalidInputError("resolution '" + text + "' is not WxH or N (e.g. 1024x1024 or 1024)");
+  const int w = std::stoi(match[1].str());
+  const int h = match[2].matched ? std::stoi(match[2].str()) : w;
+  if (w < 2 || h < 2)
+    throw InvalidInputError("resolution '" + text + "' is too small; use at least 2x2");
+  return {w, h};
+}
+
+const CLI::Validator& resolutionValidator() {
+  static const CLI::Validator validator(
+      [](std::string& value) -> std::string {
+        try {
+          parseResolution(value);
+          return {};
+        } catch (const Error& e) {
+          return e.what();
+        }
+      },
+      "WxH", "resolution");
+  return validator;
+}
+
+ProgressCallback terminalProgress(bool enabled) {
+  if (!enabled || !isatty(STDERR_FILENO)) return {};
+  return [](std::string_view stage, double fraction) {
+    const int filled = static_cast<int>(fraction * kProgressBarWidth + 0.5);
+    std::fprintf(stderr, "\r%-24.*s [%-*s] %3d%%", static_cast<int>(stage.size()), stage.data(),
+                 kProgressBarWidth, std::string(static_cast<size_t>(filled), '#').c_str(),
+                 static_cast<int>(fraction * 100.0 + 0.5));
+    if (fraction >= 1.0) std::fputc('\n', stderr);
+    std::fflush(stderr);
+    return true;
+  };
+}
+
+int runGuarded(const std::function<void()>& body) {
+  try {
+    body();
+    return 0;
+  } catch (const Error& e) {
+    std::cerr << "texgrad: error: " << e.what() << "\n";
+  } catch (const Cancelled&) {
+    std::cerr << "texgrad: cancelled\n";
+  } catch (const std::bad_alloc&) {
+    std::cerr << "texgrad: error: out of memory; try a lower --resolution\n";
+  } catch (const std::exception& e) {
+    std::cerr << "texgrad: internal error: " << e.what()
+              << " (please report this with the input that caused it)\n";
+  }
+  return 1;
+}
+
+void printJson(const nlohmann::json& document) { std::cout << document.dump(2) << "\n"; }
+
+}  // namespace texgrad::cli

@@ -1,0 +1,146 @@
+// `texgrad info`: prints the atlas diagnostics of a mesh (text or JSON); no processing.
+#include <iostream>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "texgrad/atlas/atlas.h"
+#include "texgrad/atlas/atlas_report.h"
+#include "texgrad/atlas/texel_grid.h"
+#include "texgrad/io/image_io.h"
+
+namespace texgrad::cli {
+namespace {
+
+struct InfoArgs {
+  std::string mesh;
+  std::string resolution;
+  std::string texture;
+  bool json = false;
+  double weldTolerance = 0.0;
+  int maxIds = 20;
+};
+
+nlohmann::json toJson(const AtlasReport& r) {
+  nlohmann::json j;
+  j["vertices"] = r.vertices;
+  j["uv_vertices"] = r.uvVertices;
+  j["faces"] = r.faces;
+  j["charts"] = r.charts;
+  j["seam_edges"] = r.seamEdges;
+  j["boundary_edges"] = r.boundaryEdges;
+  j["non_manifold_edges"] = r.nonManifoldEdges;
+  j["connected_components"] = r.connectedComponents;
+  j["chart_faces"] = r.chartFaceCounts;
+  j["chart_uv_areas"] = r.chartUvAreas;
+  j["issues"] = nlohmann::json::array();
+  for (const AtlasIssue& issue : r.issues) {
+    j["issues"].push_back({{"kind", issue.kind},
+                           {"meaning", issue.meaning},
+                           {"id_kind", issue.idKind},
+                           {"ids", issue.ids},
+                           {"blocking", issue.blocking}});
+  }
+  if (r.texels) {
+    const TexelStats& t = *r.texels;
+    nlohmann::json tj{{"width", t.width},
+                      {"height", t.height},
+                      {"active", t.active},
+                      {"interior", t.interior},
+                      {"boundary", t.boundary},
+                      {"multi_chart_texels", t.multiChartTexels},
+                      {"texels_outside_image", t.texelsOutsideImage},
+                      {"charts_touching_border", t.chartsTouchingBorder}};
+    tj["min_gutter_texels"] =
+        t.minGutterTexels ? nlohmann::json(*t.minGutterTexels) : nlohmann::json(nullptr);
+    j["texels"] = tj;
+  }
+  return j;
+}
+
+void printIds(const AtlasIssue& issue, int maxIds) {
+  std::cout << "    " << issue.idKind << " ids:";
+  const size_t shown = std::min(issue.ids.size(), static_cast<size_t>(maxIds));
+  for (size_t k = 0; k < shown; ++k) std::cout << " " << issue.ids[k];
+  if (issue.ids.size() > shown) std::cout << " ... (" << issue.ids.size() << " in all)";
+  std::cout << "\n";
+}
+
+void printText(const std::string& name, const AtlasReport& r, int maxIds) {
+  std::cout << name << "\n"
+            << "  vertices " << r.vertices << ", uv vertices " << r.uvVertices << ", faces "
+            << r.faces << ", surface components " << r.connectedComponents << "\n"
+            << "  charts " << r.charts << ", seam edges " << r.seamEdges << ", boundary edges "
+            << r.boundaryEdges << ", non-manifold edges " << r.nonManifoldEdges << "\n";
+  for (size_t c = 0; c < r.chartFaceCounts.size(); ++c)
+    std::cout << "    chart " << c << ": " << r.chartFaceCounts[c] << " faces, UV area "
+              << r.chartUvAreas[c] << "\n";
+  if (r.texels) {
+    const TexelStats& t = *r.texels;
+    std::cout << "  texels at " << t.width << "x" << t.height << ": active " << t.active
+              << " (interior " << t.interior << ", boundary " << t.boundary << ")\n"
+              << "    min gutter between charts: "
+              << (t.minGutterTexels ? std::to_string(*t.minGutterTexels) + " texels" : "n/a")
+              << ", texels meeting two charts: " << t.multiChartTexels
+              << ", active texels outside the image: " << t.texelsOutsideImage << "\n";
+  }
+  if (r.issues.empty()) std::cout << "  no problems found\n";
+  for (const AtlasIssue& issue : r.issues) {
+    std::cout << "  " << (issue.blocking ? "ERROR " : "warning ") << issue.kind << " ("
+              << issue.ids.size() << "): " << issue.meaning << "\n";
+    if (!issue.ids.empty()) printIds(issue, maxIds);
+  }
+}
+
+void runInfo(const InfoArgs& args) {
+  const TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  const Atlas atlas = buildAtlas(mesh);
+  std::optional<TexelGrid> grid;
+  std::string resolution = args.resolution;
+  if (resolution.empty() && !args.texture.empty()) {
+    const Image texture = readImage(args.texture);
+    resolution = std::to_string(texture.width) + "x" + std::to_string(texture.height);
+  }
+  if (!resolution.empty()) {
+    const auto [w, h] = parseResolution(resolution);
+    grid = buildTexelGrid(mesh, atlas, w, h);
+  }
+  const AtlasReport report = analyzeAtlas(mesh, atlas, grid ? &*grid : nullptr);
+  if (args.json) {
+    nlohmann::json j = toJson(report);
+    j["mesh"] = args.mesh;
+    printJson(j);
+  } else {
+    printText(args.mesh, report, args.maxIds);
+  }
+}
+
+}  // namespace
+
+void addInfoCommand(CLI::App& app) {
+  auto args = std::make_shared<InfoArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "info",
+      "Report the atlas structure of a mesh (charts, seams, boundary and non-manifold edges, "
+      "degenerate/flipped/overlapping UVs) and, at a resolution, its texel classes. Nothing is "
+      "written.");
+  cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
+      ->required();
+  cmd->add_option("--resolution,-r", args->resolution,
+                  "Texture size WxH (or N) for texel statistics; default: size of --texture, "
+                  "else no texel statistics")
+      ->check(resolutionValidator());
+  cmd->add_option("--texture,-t", args->texture,
+                  "Texture whose size sets the resolution when --resolution is not given");
+  cmd->add_flag("--json", args->json, "Print the report as JSON on stdout (default: text)");
+  cmd->add_option("--weld-tolerance", args->weldTolerance,
+                  "Weld 3-D positions closer than this (model units) to recover seams; "
+                  "0 = exact matches only")
+      ->default_val(0.0)
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-ids", args->maxIds, "How many element ids to list per problem (text)")
+      ->default_val(20)
+      ->check(CLI::NonNegativeNumber);
+  cmd->callback([args] { exitStatus = runGuarded([&] { runInfo(*args); }); });
+}
+
+}  // namespace texgrad::cli

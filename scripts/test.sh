@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# One command on a fresh Debian 12 box (as root): install, build with warnings as errors, run the
+# test suite under AddressSanitizer+UBSan (fast tests) and then the whole suite in Release.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install-deps.sh
+jobs="$(nproc)"
+
+echo "== sanitizer build (ASan + UBSan)"
+bash scripts/build.sh build/asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTEXGRAD_SANITIZE=ON \
+  -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_BENCHMARKS=OFF
+ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+  ctest --test-dir build/asan -j"$jobs" --output-on-failure -E 'Slow'
+
+echo "== release build"
+bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON
+ctest --test-dir build/release -j"$jobs" --output-on-failure
