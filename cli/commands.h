@@ -12,6 +12,8 @@ extern int exitStatus;
 void addInfoCommand(CLI::App& app);
 /// `texgrad mask`: texel class images.
 void addMaskCommand(CLI::App& app);
+/// `texgrad dilate`: gutter padding.
+void addDilateCommand(CLI::App& app);
 /// `texgrad sample`: writes the built-in sample mesh and texture.
 void addSampleCommand(CLI::App& app);
 

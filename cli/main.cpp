@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   app.fallthrough(false);
   texgrad::cli::addInfoCommand(app);
   texgrad::cli::addMaskCommand(app);
+  texgrad::cli::addDilateCommand(app);
   texgrad::cli::addSampleCommand(app);
   try {
     app.parse(argc, argv);

@@ -1,6 +1,7 @@
 // Float image held in texel order (row 0 = bottom, v upward); image files are flipped on I/O only.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
