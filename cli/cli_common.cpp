@@ -6,7 +6,8 @@
 #include <cstdio>
 #include <iostream>
 #include <new>
-#include <regex>
+#include <cctype>
+#include <optional>
 
 #include "texgrad/core/error.h"
 #include "texgrad/io/image_io.h"
@@ -56,16 +57,29 @@ Image loadTexture(const TexturedMesh& mesh, const std::string& meshSpec,
                           " texture; pass the texture file as an argument");
 }
 
+namespace {
+
+/// Parses 1-6 decimal digits starting at `pos`, advancing it; nullopt if there are none or more.
+std::optional<int> parseDigits(const std::string& text, size_t& pos) {
+  const size_t start = pos;
+  while (pos < text.size() && pos - start < 7 && std::isdigit(static_cast<unsigned char>(text[pos])))
+    ++pos;
+  if (pos == start || pos - start > 6) return std::nullopt;
+  return std::stoi(text.substr(start, pos - start));
+}
+
+}  // namespace
+
 std::pair<int, int> parseResolution(const std::string& text) {
-  static const std::regex pattern(R"((\d{1,6})(?:[xX](\d{1,6}))?)");
-  std::smatch match;
-  if (!std::regex_match(text, match, pattern))
+  size_t pos = 0;
+  const std::optional<int> w = parseDigits(text, pos);
+  std::optional<int> h = w;
+  if (w && pos < text.size() && (text[pos] == 'x' || text[pos] == 'X')) h = parseDigits(text, ++pos);
+  if (!w || !h || pos != text.size())
     throw InvalidInputError("resolution '" + text + "' is not WxH or N (e.g. 1024x1024 or 1024)");
-  const int w = std::stoi(match[1].str());
-  const int h = match[2].matched ? std::stoi(match[2].str()) : w;
-  if (w < 2 || h < 2)
+  if (*w < 2 || *h < 2)
     throw InvalidInputError("resolution '" + text + "' is too small; use at least 2x2");
-  return {w, h};
+  return {*w, *h};
 }
 
 const CLI::Validator& resolutionValidator() {

@@ -51,6 +51,9 @@ struct TexelGrid {
   /// Per cell: coverage, and the chart covering it (-1 if empty; smallest index if several).
   std::vector<CellCoverage> cellCoverage;
   std::vector<int32_t> cellChart;
+  /// Cells whose covered area exceeds the cell (stacked or folded UVs: several surface points
+  /// per texel), as cell indices.
+  std::vector<int32_t> overlapCells;
 
   /// Number of active texels (unknowns).
   int unknownCount() const { return static_cast<int>(texelOfUnknown.size()); }

@@ -1,0 +1,109 @@
+// Operators of paper Sec. 5 on the texel basis (fem/): mass M, stiffness S, per-cell stiffness
+// modulation, the texel-pair list A, d, the Whitney Hodge star *1, mass_h and div_h.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <functional>
+#include <memory>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "texgrad/atlas/atlas.h"
+#include "texgrad/atlas/texel_grid.h"
+#include "texgrad/core/progress.h"
+#include "texgrad/fem/metric.h"
+#include "texgrad/fem/texel_basis.h"
+#include "texgrad/io/textured_mesh.h"
+
+namespace texgrad {
+
+/// Sparse matrix type of all operators (column-major, int indices).
+using SparseMatrixd = Eigen::SparseMatrix<double>;
+
+/// Options of TexelOperators.
+struct OperatorOptions {
+  fem::BasisKind basis = fem::BasisKind::SeamContinuous;  ///< function space (paper Sec. 4)
+  int facesPerTask = 64;  ///< faces per parallel task; fixed so results do not depend on threads
+  /// Checks the options; throws InvalidInputError naming the bad field.
+  void validate() const;
+};
+
+/// A scalar signal on the surface (psi of paper Sec. 5.3), evaluated at points of M.
+using SurfaceScalar = std::function<double(const fem::SurfacePoint&)>;
+/// A 1-form on the surface (omega of paper Sec. 5.3) as components (w_x, w_y) on the texel
+/// coordinate differentials dx, dy of the point's face; for a 3-D gradient v use J^T v.
+using SurfaceOneForm = std::function<Eigen::Vector2d(const fem::SurfacePoint&)>;
+
+/// What the assembly saw.
+struct OperatorReport {
+  int plainFullPieces = 0;     ///< pieces that are whole cells with exactly bilinear basis
+  int plainPartialPieces = 0;  ///< other pieces with exactly bilinear basis
+  int seamPieces = 0;          ///< pieces touching a seam (quadratic elements)
+  int unexpectedCrossings = 0; ///< clipping inconsistencies (0 unless the input is pathological)
+  fem::MetricReport metric;    ///< immersion-metric diagnostics
+};
+
+/// Stateful builder: clips and integrates the metric-independent parts once, then assembles
+/// M and S for any per-face metric and S_beta = sum_c beta_c S_c for any per-cell beta cheaply.
+/// Unknowns are TexelGrid::unknownOfTexel; mesh and grid must outlive the object.
+class TexelOperators {
+ public:
+  /// Builds the basis, the per-piece integrals, the sparsity pattern, and M, S for the immersion
+  /// metric of the unit-area surface (paper Sec. 7).
+  TexelOperators(const TexturedMesh& mesh, const Atlas& atlas, const TexelGrid& grid,
+                 const OperatorOptions& options = {}, const ProgressCallback& progress = {});
+  ~TexelOperators();
+  TexelOperators(const TexelOperators&) = delete;
+  TexelOperators& operator=(const TexelOperators&) = delete;
+
+  /// Replaces the per-face metric (SPD 2x2 in texel coordinates, one per face; faces with zero UV
+  /// area are ignored) and re-assembles M and S (no clipping or integration is redone).
+  void setMetric(std::vector<Eigen::Matrix2d> metric);
+  /// Current per-face metric.
+  const std::vector<Eigen::Matrix2d>& metric() const;
+
+  /// Mass matrix M = *0 (|T| x |T|, SPD): M_st = int sqrt|g| phi_s phi_t (paper Sec. 5.2);
+  /// units of surface area (1^T M 1 = surface area, 1 for the immersion metric).
+  const SparseMatrixd& mass() const;
+  /// Stiffness matrix S (|T| x |T|, symmetric PSD, S 1 = 0): S_st = int sqrt|g| g^-1(dphi_s,
+  /// dphi_t) (paper Sec. 5.3 footnote 5); positive diagonal (the negative of a Laplacian).
+  const SparseMatrixd& stiffness() const;
+  /// sum_c beta_c S_c with S_c the stiffness integrated over cell c only (paper Sec. 7.1);
+  /// beta is indexed by TexelGrid::cellIndex. Same pattern as stiffness().
+  SparseMatrixd modulatedStiffness(std::span<const double> betaPerCell) const;
+
+  /// Texel pairs A: (s, t), s < t, whose supports overlap (structural off-diagonals of S),
+  /// ordered by s then t.
+  std::vector<std::pair<int32_t, int32_t>> texelPairs() const;
+  /// Difference operator d (|A| x |T|): row a = (s, t) has -1 at s and +1 at t (paper Sec. 5.1).
+  SparseMatrixd differential() const;
+  /// Whitney Hodge star *1 (|A| x |A|, SPD): int sqrt|g| g^-1(omega_a, omega_b) with
+  /// omega_(s,t) = phi_s dphi_t - phi_t dphi_s (paper Sec. 5.2); d^T *1 d = S. Memory ~ 11 |A|.
+  SparseMatrixd hodgeStar1() const;
+  /// mass_h(psi) (|T|): int sqrt|g| phi_t psi (paper Sec. 5.3), quadrature of `degree` per element.
+  Eigen::VectorXd massOf(const SurfaceScalar& psi, int degree = 4) const;
+  /// div_h(omega) (|T|): int sqrt|g| g^-1(dphi_t, omega) (paper Sec. 5.3; no minus sign).
+  Eigen::VectorXd divergenceOf(const SurfaceOneForm& omega, int degree = 4) const;
+
+  /// The function space.
+  const fem::TexelBasis& basis() const;
+  /// Assembly diagnostics.
+  const OperatorReport& report() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Mass and stiffness matrices for the immersion metric (one-shot TexelOperators).
+struct MassStiffness {
+  SparseMatrixd mass;       ///< M (|T| x |T|)
+  SparseMatrixd stiffness;  ///< S (|T| x |T|)
+};
+/// Builds M and S of a mesh/atlas/grid for the immersion metric of the unit-area surface.
+MassStiffness buildMassStiffness(const TexturedMesh& mesh, const Atlas& atlas,
+                                 const TexelGrid& grid, const OperatorOptions& options = {});
+
+}  // namespace texgrad

@@ -1,0 +1,41 @@
+// Solver module: preconditioned conjugate gradients on all channels at once, for systems where
+// plain multigrid converges slowly (anisotropic metrics, LIC; paper §8 limitations).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <functional>
+
+#include "texgrad/solver/multigrid_solver.h"
+#include "texgrad/solver/solve_report.h"
+
+namespace texgrad {
+
+/// Stopping rule for conjugateGradient.
+struct CgOptions {
+  int maxIterations = 1000;  ///< upper bound on iterations
+  double tolerance = 1e-6;   ///< relative residual ||b - A x||_F / ||b||_F to reach
+  /// Throws InvalidInputError naming the first bad field.
+  void validate() const;
+};
+
+/// Applies z = M⁻¹ r to an n x k block (M SPD); an empty function means the identity.
+using Preconditioner = std::function<void(const Eigen::MatrixXd& r, Eigen::MatrixXd& z)>;
+
+/// Solves A X = B (A n x n SPD with both triangles stored; B, X n x k) by preconditioned CG, one
+/// independent recurrence per column, starting from X. Non-convergence is reported, not thrown.
+SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,
+                              Eigen::MatrixXd& x, const Preconditioner& preconditioner,
+                              const CgOptions& options = {});
+
+/// One symmetric V-cycle from zero as an SPD preconditioner; `solver` must outlive the result.
+template <typename Scalar>
+Preconditioner multigridPreconditioner(const MultigridSolver<Scalar>& solver) {
+  return [&solver](const Eigen::MatrixXd& r, Eigen::MatrixXd& z) { solver.precondition(r, z); };
+}
+
+/// y = A x for a symmetric A with both triangles stored (n x n), x and y n x k; parallel.
+void symmetricProduct(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& x,
+                      Eigen::MatrixXd& y);
+
+}  // namespace texgrad

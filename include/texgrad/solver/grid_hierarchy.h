@@ -1,0 +1,79 @@
+// Solver module: per-chart multiresolution texel grids and bilinear prolongations (paper §6.1).
+// Built from the atlas TexelGrid alone; knows nothing about meshes.
+#pragma once
+
+#include <Eigen/SparseCore>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "texgrad/atlas/texel_grid.h"
+
+namespace texgrad {
+
+/// Kind of a lattice slot of a hierarchy level.
+enum class SlotKind : uint8_t {
+  Empty = 0,     ///< no unknown here
+  Interior = 1,  ///< relaxed by Gauss–Seidel with a regular 9-point stencil (Fig. 8, R.3/P.6)
+  Boundary = 2,  ///< solved directly with interior values locked (Fig. 8, R.5/P.4)
+};
+
+/// Rectangle of lattice slots holding one chart's texels at one level, with a one-slot empty ring.
+struct GridBox {
+  int chart = -1;             ///< chart whose texels live in this box
+  int x0 = 0, y0 = 0;         ///< level-lattice coordinates of the box's slot (0, 0)
+  int width = 0, height = 0;  ///< size in slots, ring included
+  int64_t offset = 0;         ///< index of slot (0, 0) in the level's slot arrays
+  /// Slot index of level-lattice position (x, y), which must lie in the box.
+  int64_t slot(int x, int y) const {
+    return offset + static_cast<int64_t>(y - y0) * width + (x - x0);
+  }
+  /// True if level-lattice position (x, y) lies in the box.
+  bool contains(int x, int y) const {
+    return x >= x0 && y >= y0 && x < x0 + width && y < y0 + height;
+  }
+};
+
+/// Texels of one level. Level-l lattice position (x, y) is fine grid texel (2^l x, 2^l y); the
+/// chart origin of every chart is grid texel (0, 0). Unknowns are numbered as in the TexelGrid at
+/// level 0 and in slot order at coarser levels.
+struct GridLevel {
+  std::vector<GridBox> boxes;          ///< one box per chart present at this level
+  std::vector<int32_t> boxOfChart;     ///< per chart: index into boxes, -1 if absent
+  int64_t slotCount = 0;               ///< total slots over all boxes
+  std::vector<int32_t> unknownOfSlot;  ///< per slot: unknown index or -1
+  std::vector<int64_t> slotOfUnknown;  ///< per unknown: slot index
+  std::vector<int32_t> chartOfUnknown; ///< per unknown: chart
+  std::vector<int32_t> xOfUnknown, yOfUnknown;  ///< per unknown: level-lattice position
+  /// Per unknown: footprint [-2^l, 2^l]^2 entirely made of Full cells of its chart (paper §6.1).
+  std::vector<uint8_t> footprintInterior;
+  /// Number of unknowns at this level.
+  int unknownCount() const { return static_cast<int>(slotOfUnknown.size()); }
+};
+
+/// Per-chart grid hierarchy: levels 0..L and prolongations P^l (n_l x n_{l+1}), bilinear
+/// up-sampling weights 1, 1/2, 1/4 restricted to texels of the same chart (paper §6.1).
+class GridHierarchy {
+ public:
+  /// Builds levels 0..L from the texel classes of `grid`, with L <= maxLevels; coarsening stops
+  /// early when a level has fewer than minCoarseUnknowns unknowns or no footprint-interior texel.
+  static GridHierarchy build(const TexelGrid& grid, int maxLevels, int minCoarseUnknowns);
+
+  /// Number of levels including level 0 (L + 1).
+  int levelCount() const { return static_cast<int>(levels_.size()); }
+  /// Level l (0 = finest, the TexelGrid's unknowns).
+  const GridLevel& level(int l) const { return levels_[static_cast<size_t>(l)]; }
+  /// Prolongation P^l from level l + 1 to level l, n_l x n_{l+1}; R^l = (P^l)ᵀ.
+  const Eigen::SparseMatrix<double>& prolongation(int l) const {
+    return prolongations_[static_cast<size_t>(l)];
+  }
+  /// Number of charts (boxes at level 0 are indexed by chart).
+  int chartCount() const { return chartCount_; }
+
+ private:
+  std::vector<GridLevel> levels_;
+  std::vector<Eigen::SparseMatrix<double>> prolongations_;
+  int chartCount_ = 0;
+};
+
+}  // namespace texgrad

@@ -1,0 +1,116 @@
+// Solver module: texel-grid multigrid with boundary direct solves (paper §6.2, Fig. 8), usable on
+// its own (V-cycles) or as a symmetric preconditioner for conjugate gradients.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <iosfwd>
+#include <memory>
+#include <string>
+
+#include "texgrad/atlas/texel_grid.h"
+#include "texgrad/solver/grid_hierarchy.h"
+#include "texgrad/solver/solve_report.h"
+
+namespace texgrad {
+
+/// Multigrid parameters; CLI flags map one-to-one onto these fields.
+struct MultigridOptions {
+  /// L: coarsenings below the texel grid (paper §6.3 default 4); fewer if the grid gets tiny.
+  int levels = 4;
+  /// n: Gauss–Seidel sweeps over interior texels per level, before and after (paper default 3).
+  int sweeps = 3;
+  /// A level with fewer unknowns than this is not coarsened further (it is solved directly).
+  int minCoarseUnknowns = 256;
+  /// Worker threads for relaxation and transfers; 0 = all available. Results do not depend on it.
+  int threads = 0;
+  /// Throws InvalidInputError naming the first bad field.
+  void validate() const;
+};
+
+/// When solve() stops: after maxCycles, or once the relative residual falls below tolerance.
+struct SolveControl {
+  int maxCycles = 10;        ///< upper bound on V-cycles (or CG iterations)
+  double tolerance = 0.0;    ///< relative residual ||b - A x|| / ||b|| to reach; 0 = run all cycles
+  /// Throws InvalidInputError naming the first bad field.
+  void validate() const;
+};
+
+/// Counters and timings of the set-up phases (paper §6.3, Table 1: initialization / update).
+struct MultigridStats {
+  int inits = 0;                 ///< hierarchy builds and symbolic analyses (init calls)
+  int updates = 0;               ///< numeric updates (Galerkin products and factorisations)
+  int symbolicAnalyses = 0;      ///< CHOLMOD analyses over all boundary and coarse systems
+  int numericFactorizations = 0; ///< CHOLMOD factorisations over all boundary and coarse systems
+  double initSeconds = 0.0;      ///< total time in init
+  double updateSeconds = 0.0;    ///< total time in update
+};
+
+/// Multigrid solver for A x = b over the unknowns of a TexelGrid, A = alpha M + S (n x n SPD,
+/// unknown order of the TexelGrid). Interior texels are relaxed by multi-colour Gauss–Seidel on
+/// 9-point stencils held as dense per-slot arrays; boundary texels and the coarsest level are
+/// solved with CHOLMOD in double precision. Scalar (float or double) is the precision of the
+/// relaxation, transfers and right-hand sides. The V-cycle is symmetric (colour order and phase
+/// order reversed on the way up), so it is an SPD preconditioner.
+template <typename Scalar>
+class MultigridSolver {
+ public:
+  /// Dense n x k block of k channels (RGB: k = 3) in the unknown order of the TexelGrid.
+  using Matrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+
+  /// Creates a solver with the given options (validated).
+  explicit MultigridSolver(const MultigridOptions& options = {});
+  ~MultigridSolver();
+  MultigridSolver(MultigridSolver&&) noexcept;
+  MultigridSolver& operator=(MultigridSolver&&) noexcept;
+
+  /// Symbolic phase: builds the hierarchy, the coarse sparsity patterns, the interior/boundary
+  /// split and the CHOLMOD analyses. `pattern` has the sparsity of every later A (values unused).
+  void init(const TexelGrid& grid, const Eigen::SparseMatrix<double>& pattern);
+  /// Numeric phase: Galerkin products A^{l+1} = Pᵀ A^l P, stencils, boundary and coarse
+  /// factorisations. `a` must have the pattern given to init. Throws NumericalError if a block is
+  /// not positive definite.
+  void update(const Eigen::SparseMatrix<double>& a);
+  /// One V-cycle (Fig. 8) improving x in place for right-hand side b (both n x k).
+  void cycle(const Matrix& b, Matrix& x);
+  /// V-cycles from the initial guess x until control is met; residual and change per cycle.
+  SolveReport solve(const Matrix& b, Matrix& x, const SolveControl& control);
+  /// Preconditioner application z = V(r): one V-cycle from z = 0 (double in, double out).
+  void precondition(const Eigen::MatrixXd& r, Eigen::MatrixXd& z) const;
+
+  /// Eigen preconditioner shape: re-runs init's symbolic phase for a new pattern (same grid).
+  MultigridSolver& analyzePattern(const Eigen::SparseMatrix<double>& a);
+  /// Eigen preconditioner shape: update(a).
+  MultigridSolver& factorize(const Eigen::SparseMatrix<double>& a);
+  /// Eigen preconditioner shape: update(a) (init must have been called with the grid).
+  MultigridSolver& compute(const Eigen::SparseMatrix<double>& a);
+  /// Eigen preconditioner shape: one V-cycle from zero for a single column (not thread-safe:
+  /// cycles share workspace).
+  Eigen::VectorXd solve(const Eigen::VectorXd& r) const;
+  /// Eigen::Success after update, Eigen::InvalidInput before.
+  Eigen::ComputationInfo info() const;
+
+  /// The grid hierarchy (valid after init).
+  const GridHierarchy& hierarchy() const;
+  /// Set-up counters and timings.
+  const MultigridStats& stats() const;
+  /// Time per phase accumulated over every cycle since the last update.
+  const PhaseTimes& cycleTimes() const;
+  /// Table of levels: unknowns, interior/boundary split and non-zeros per level.
+  std::string summary() const;
+  /// Options in use.
+  const MultigridOptions& options() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Prints summary().
+template <typename Scalar>
+std::ostream& operator<<(std::ostream& os, const MultigridSolver<Scalar>& solver);
+
+extern template class MultigridSolver<float>;
+extern template class MultigridSolver<double>;
+
+}  // namespace texgrad

@@ -1,0 +1,39 @@
+// Solver module: the report every iterative or direct solve returns (iterations, residuals, timing).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace texgrad {
+
+/// Wall-clock seconds spent in each phase of a multigrid V-cycle (paper §6.3, Fig. 10).
+struct PhaseTimes {
+  double relaxation = 0.0;  ///< interior Gauss–Seidel sweeps, all levels
+  double boundary = 0.0;    ///< boundary direct solves with interior locked, all levels
+  double coarse = 0.0;      ///< direct solve at the coarsest level
+  double transfer = 0.0;    ///< residuals, restriction and prolongation
+  double matvec = 0.0;      ///< sparse matrix-vector products (conjugate gradients)
+  double preconditioner = 0.0;  ///< preconditioner applications (conjugate gradients)
+  double other = 0.0;       ///< everything else (scatter/gather, norms, vector updates)
+  /// Sum of all phases.
+  double total() const {
+    return relaxation + boundary + coarse + transfer + matvec + preconditioner + other;
+  }
+};
+
+/// Outcome of solve(): non-convergence is reported here, never thrown.
+struct SolveReport {
+  int iterations = 0;           ///< V-cycles or CG iterations performed
+  bool converged = false;       ///< true when the requested tolerance was reached
+  /// Relative residual ||b - A x||_F / ||b||_F (all channels together); entry 0 is the initial guess.
+  std::vector<double> residuals;
+  /// Root-mean-square change of x per iteration (over all unknowns and channels).
+  std::vector<double> rmsChange;
+  PhaseTimes times;             ///< time per phase, summed over iterations
+  /// Mean residual reduction factor per iteration over the last `window` iterations (0 if unknown).
+  double convergenceFactor(int window = 3) const;
+  /// One line per iteration: index, residual, RMS change; then the phase times.
+  std::string toString() const;
+};
+
+}  // namespace texgrad

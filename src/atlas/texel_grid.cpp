@@ -1,0 +1,136 @@
+// buildTexelGrid: exact cell coverage from the lattice clipper, then texel classes and numbering
+// (DESIGN.md §2): active if a footprint cell is covered, interior if all four lie in one chart.
+#include "texgrad/atlas/texel_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "texgrad/atlas/cell_clipping.h"
+#include "texgrad/core/error.h"
+
+namespace texgrad {
+namespace {
+
+/// Largest grid we agree to build (cells); beyond it UVs are almost surely not an atlas.
+constexpr double kMaxCells = 1u << 28;
+
+double uvTriangleArea2(const std::array<Eigen::Vector2d, 3>& c) {
+  const Eigen::Vector2d e1 = c[1] - c[0], e2 = c[2] - c[0];
+  return e1.x() * e2.y() - e1.y() * e2.x();
+}
+
+void setExtent(const TexturedMesh& mesh, TexelGrid& g) {
+  double lx = std::numeric_limits<double>::infinity(), ly = lx, hx = -lx, hy = -lx;
+  for (const Triangle& t : mesh.uvTriangles)
+    for (int32_t k : t) {
+      const Eigen::Vector2d p(mesh.uvs[k].x() * g.imageWidth - 0.5,
+                              mesh.uvs[k].y() * g.imageHeight - 0.5);
+      lx = std::min(lx, p.x());
+      hx = std::max(hx, p.x());
+      ly = std::min(ly, p.y());
+      hy = std::max(hy, p.y());
+    }
+  if (!(lx <= hx)) return;  // no faces: empty grid
+  const double cells = (std::ceil(hx) - std::floor(lx) + 2) * (std::ceil(hy) - std::floor(ly) + 2);
+  if (cells > kMaxCells) {
+    std::ostringstream msg;
+    msg << "UV coordinates span " << (hx - lx) / g.imageWidth << " x " << (hy - ly) / g.imageHeight
+        << " texture widths; texgrad needs an atlas inside about [0,1]^2 (no tiling UVs)";
+    throw InvalidInputError(msg.str());
+  }
+  g.x0 = static_cast<int>(std::floor(lx));
+  g.y0 = static_cast<int>(std::floor(ly));
+  g.nx = static_cast<int>(std::ceil(hx)) - g.x0 + 1;
+  g.ny = static_cast<int>(std::ceil(hy)) - g.y0 + 1;
+}
+
+/// Accumulates covered area per cell and the charts meeting each cell.
+void coverCells(const TexturedMesh& mesh, const Atlas& atlas, TexelGrid& g,
+                std::vector<double>& area, std::vector<uint8_t>& multi) {
+  FaceClip clip;
+  std::array<std::vector<EdgeEvent>, 3> events;
+  for (int32_t f = 0; f < static_cast<int32_t>(mesh.faceCount()); ++f) {
+    std::array<Eigen::Vector2d, 3> c;
+    for (int k = 0; k < 3; ++k) c[k] = g.toGrid(mesh.uvs[mesh.uvTriangles[f][k]]);
+    if (uvTriangleArea2(c) == 0.0) continue;  // UV-degenerate: covers nothing
+    std::array<std::span<const EdgeEvent>, 3> spans;
+    for (int e = 0; e < 3; ++e) {
+      events[e] = latticeCrossings(c[e], c[(e + 1) % 3]);
+      spans[e] = events[e];
+    }
+    clipTriangleToCells(c, spans, clip);
+    const int32_t chart = atlas.chartOfFace[f];
+    for (const FacePiece& piece : clip.pieces) {
+      const int cell = g.cellIndex(piece.cellX, piece.cellY);
+      area[cell] += piece.full ? 1.0 : polygonArea(clip.polygon(piece));
+      int32_t& owner = g.cellChart[cell];
+      if (owner >= 0 && owner != chart) multi[cell] = 1;
+      if (owner < 0 || chart < owner) owner = chart;
+    }
+  }
+}
+
+void classifyCells(TexelGrid& g, const std::vector<double>& area,
+                   const std::vector<uint8_t>& multi) {
+  constexpr double kTolerance = 1e-9;
+  g.cellCoverage.assign(area.size(), CellCoverage::Empty);
+  for (size_t k = 0; k < area.size(); ++k) {
+    if (area[k] <= 0.0) continue;
+    const bool full = !multi[k] && std::abs(area[k] - 1.0) <= kTolerance;
+    g.cellCoverage[k] = full ? CellCoverage::Full : CellCoverage::Partial;
+    if (area[k] > 1.0 + kTolerance) g.overlapCells.push_back(static_cast<int32_t>(k));
+  }
+}
+
+void classifyTexels(TexelGrid& g, const std::vector<uint8_t>& multi) {
+  const size_t texels = static_cast<size_t>(g.nx) * static_cast<size_t>(g.ny);
+  g.texelClass.assign(texels, TexelClass::Inactive);
+  g.texelChart.assign(texels, -1);
+  g.unknownOfTexel.assign(texels, -1);
+  for (int y = 0; y < g.ny; ++y)
+    for (int x = 0; x < g.nx; ++x) {
+      int covered = 0, full = 0;
+      int32_t chart = -1;
+      bool severalCharts = false;
+      for (int b = y - 1; b <= y; ++b)
+        for (int a = x - 1; a <= x; ++a) {
+          const int cell = g.cellIndex(a, b);
+          if (g.cellCoverage[cell] == CellCoverage::Empty) continue;
+          ++covered;
+          full += g.cellCoverage[cell] == CellCoverage::Full;
+          severalCharts |= multi[cell] != 0 || (chart >= 0 && chart != g.cellChart[cell]);
+          if (chart < 0 || g.cellChart[cell] < chart) chart = g.cellChart[cell];
+        }
+      if (covered == 0) continue;
+      const int t = g.texelIndex(x, y);
+      g.texelClass[t] = full == 4 && !severalCharts ? TexelClass::Interior : TexelClass::Boundary;
+      g.texelChart[t] = chart;
+      if (severalCharts) g.multiChartTexels.push_back(t);
+      g.unknownOfTexel[t] = static_cast<int32_t>(g.texelOfUnknown.size());
+      g.texelOfUnknown.push_back(t);
+    }
+}
+
+}  // namespace
+
+TexelGrid buildTexelGrid(const TexturedMesh& mesh, const Atlas& atlas, int width, int height) {
+  if (width <= 0 || height <= 0)
+    throw InvalidInputError("texture resolution must be positive, got " + std::to_string(width) +
+                            "x" + std::to_string(height));
+  TexelGrid g;
+  g.imageWidth = width;
+  g.imageHeight = height;
+  setExtent(mesh, g);
+  const size_t cells = static_cast<size_t>(g.nx + 1) * static_cast<size_t>(g.ny + 1);
+  std::vector<double> area(cells, 0.0);
+  std::vector<uint8_t> multi(cells, 0);
+  g.cellChart.assign(cells, -1);
+  coverCells(mesh, atlas, g, area, multi);
+  classifyCells(g, area, multi);
+  classifyTexels(g, multi);
+  return g;
+}
+
+}  // namespace texgrad

@@ -1,0 +1,294 @@
+// Operator assembly: (A) per-face clipping and metric-independent integrals in fixed face chunks
+// (parallel), (B) metric/beta-dependent accumulation into a precomputed pattern, cell-row bands in
+// two colours (parallel, disjoint columns), seam pieces last: bit-identical for any thread count.
+#include "texgrad/operators/texel_operators.h"
+
+#include <Eigen/LU>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "texel_operators_impl.h"
+#include "texgrad/core/error.h"
+
+namespace texgrad {
+namespace {
+
+constexpr int kBandRows = 8;  ///< cell rows per assembly band (two bands apart never share a row)
+
+
+}  // namespace
+
+void OperatorOptions::validate() const {
+  if (facesPerTask < 1) throw InvalidInputError("OperatorOptions.facesPerTask must be >= 1");
+}
+
+int TexelOperators::Impl::band(int cellY) const { return (cellY + 1) / kBandRows; }
+
+void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
+  const int faces = basis.faceCount();
+  const int grain = options.facesPerTask;
+  const int chunks = (faces + grain - 1) / grain;
+  struct Chunk {
+    std::vector<FullPiece> full;
+    std::vector<PartialPiece> partial;
+    std::vector<SeamPiece> seam;
+    std::vector<int32_t> texels;
+    std::vector<double> values;
+    int unexpected = 0;
+  };
+  std::vector<Chunk> out(chunks);
+  tbb::parallel_for(0, chunks, [&](int c) {
+    Chunk& chunk = out[c];
+    FaceClip clip;
+    fem::PieceBasis pb;
+    detail::LocalIntegrals li;
+    for (int f = c * grain; f < std::min(faces, (c + 1) * grain); ++f) {
+      basis.clipFace(f, clip);
+      chunk.unexpected += clip.unexpectedCrossings;
+      for (const auto& piece : clip.pieces) {
+        const auto poly = clip.polygon(piece);
+        if (basis.isPlain(f, poly)) {
+          if (piece.full)
+            chunk.full.push_back({f, piece.cellX, piece.cellY});
+          else
+            chunk.partial.push_back(
+                {f, piece.cellX, piece.cellY, detail::polygonMoments(poly, piece.cellX, piece.cellY)});
+          continue;
+        }
+        basis.buildPieceBasis(f, poly, pb);
+        detail::quadraticIntegrals(pb, li);
+        SeamPiece sp{f, piece.cellX, piece.cellY, static_cast<int32_t>(chunk.texels.size()), 0,
+                     static_cast<int64_t>(chunk.values.size())};
+        chunk.texels.insert(chunk.texels.end(), pb.texels.begin(), pb.texels.end());
+        sp.texelEnd = static_cast<int32_t>(chunk.texels.size());
+        for (const Eigen::MatrixXd* m : {&li.mass, &li.kxx, &li.kxy, &li.kyy})
+          chunk.values.insert(chunk.values.end(), m->data(), m->data() + m->size());
+        chunk.seam.push_back(sp);
+      }
+    }
+  });
+  reportProgress(progress, "integrate pieces", 0.6);
+  // Concatenate in chunk order, then stable-sort plain pieces by band.
+  std::vector<FullPiece> fullAll;
+  std::vector<PartialPiece> partialAll;
+  for (Chunk& chunk : out) {
+    fullAll.insert(fullAll.end(), chunk.full.begin(), chunk.full.end());
+    partialAll.insert(partialAll.end(), chunk.partial.begin(), chunk.partial.end());
+    const auto texelBase = static_cast<int32_t>(seamTexels.size());
+    const auto valueBase = static_cast<int64_t>(seamValues.size());
+    for (SeamPiece sp : chunk.seam) {
+      sp.texelBegin += texelBase;
+      sp.texelEnd += texelBase;
+      sp.valueBegin += valueBase;
+      seam.push_back(sp);
+    }
+    seamTexels.insert(seamTexels.end(), chunk.texels.begin(), chunk.texels.end());
+    seamValues.insert(seamValues.end(), chunk.values.begin(), chunk.values.end());
+    report.unexpectedCrossings += chunk.unexpected;
+    chunk = Chunk();
+  }
+  bandCount = band(basis.grid().ny - 1) + 1;
+  auto bucket = [&](auto& all, auto& sorted, std::vector<int64_t>& begin) {
+    begin.assign(bandCount + 1, 0);
+    for (const auto& p : all) ++begin[band(p.cellY) + 1];
+    for (int b = 0; b < bandCount; ++b) begin[b + 1] += begin[b];
+    std::vector<int64_t> cursor(begin.begin(), begin.end() - 1);
+    sorted.resize(all.size());
+    for (const auto& p : all) sorted[cursor[band(p.cellY)]++] = p;
+  };
+  bucket(fullAll, full, fullBandBegin);
+  bucket(partialAll, partial, partialBandBegin);
+  report.plainFullPieces = static_cast<int>(full.size());
+  report.plainPartialPieces = static_cast<int>(partial.size());
+  report.seamPieces = static_cast<int>(seam.size());
+}
+
+void TexelOperators::Impl::buildPattern() {
+  const TexelGrid& grid = basis.grid();
+  cellCovered.assign(static_cast<size_t>(grid.nx + 1) * (grid.ny + 1), 0);
+  auto mark = [&](const auto& pieces) {
+    for (const auto& p : pieces) cellCovered[grid.cellIndex(p.cellX, p.cellY)] = 1;
+  };
+  mark(full);
+  mark(partial);
+  mark(seam);
+  // Extra (column, row) pairs created by seam pieces.
+  std::vector<std::pair<int32_t, int32_t>> extra;
+  for (const SeamPiece& sp : seam)
+    for (int32_t i = sp.texelBegin; i < sp.texelEnd; ++i)
+      for (int32_t j = sp.texelBegin; j < sp.texelEnd; ++j)
+        extra.emplace_back(seamTexels[i], seamTexels[j]);
+  std::sort(extra.begin(), extra.end());
+  extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
+  const int n = grid.unknownCount();
+  std::vector<int32_t> outer(n + 1, 0);
+  std::vector<int32_t> inner;
+  inner.reserve(static_cast<size_t>(n) * 9);
+  std::vector<int32_t> column;
+  size_t e = 0;
+  for (int u = 0; u < n; ++u) {
+    column.clear();
+    const int t = grid.texelOfUnknown[u];
+    const int x = t % grid.nx, y = t / grid.nx;
+    for (int b = y - 1; b <= y; ++b)
+      for (int a = x - 1; a <= x; ++a) {
+        if (!cellCovered[grid.cellIndex(a, b)]) continue;
+        for (int32_t v : basis.cellTexels(a, b))
+          if (v >= 0) column.push_back(v);
+      }
+    while (e < extra.size() && extra[e].first == u) column.push_back(extra[e++].second);
+    std::sort(column.begin(), column.end());
+    column.erase(std::unique(column.begin(), column.end()), column.end());
+    inner.insert(inner.end(), column.begin(), column.end());
+    outer[u + 1] = static_cast<int32_t>(inner.size());
+  }
+  pattern.resize(n, n);
+  pattern.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
+  std::copy(outer.begin(), outer.end(), pattern.outerIndexPtr());
+  std::copy(inner.begin(), inner.end(), pattern.innerIndexPtr());
+  std::fill(pattern.valuePtr(), pattern.valuePtr() + inner.size(), 0.0);
+}
+
+namespace {
+
+/// Adds local (k x k) values into column-major CSC storage at (row texels[j], column texels[i]).
+template <typename Local>
+void scatter(SparseMatrixd& m, const int32_t* texels, int k, const Local& local, double scale) {
+  const int* outer = m.outerIndexPtr();
+  const int* inner = m.innerIndexPtr();
+  double* values = m.valuePtr();
+  for (int i = 0; i < k; ++i) {
+    if (texels[i] < 0) continue;
+    const int* begin = inner + outer[texels[i]];
+    const int* end = inner + outer[texels[i] + 1];
+    for (int j = 0; j < k; ++j) {
+      if (texels[j] < 0) continue;
+      const int* pos = std::lower_bound(begin, end, texels[j]);
+      values[pos - inner] += scale * local(j, i);
+    }
+  }
+}
+
+}  // namespace
+
+void TexelOperators::Impl::assemble(const double* beta, SparseMatrixd* massOut,
+                                    SparseMatrixd* stiffnessOut) const {
+  const TexelGrid& grid = basis.grid();
+  if (massOut) *massOut = pattern;
+  if (stiffnessOut) *stiffnessOut = pattern;
+  static const detail::BilinearIntegrals unit = detail::bilinearIntegrals(detail::unitCellMoments());
+  auto cellBeta = [&](int a, int b) { return beta ? beta[grid.cellIndex(a, b)] : 1.0; };
+  auto plain = [&](int face, int a, int b, const detail::BilinearIntegrals& in) {
+    const FaceFactors& f = factors[face];
+    const auto texels = basis.cellTexels(a, b);
+    if (massOut) scatter(*massOut, texels.data(), 4, in.mass, f.mass);
+    if (stiffnessOut) {
+      const Eigen::Matrix4d s = f.xx * in.kxx + f.xy * in.kxy + f.yy * in.kyy;
+      scatter(*stiffnessOut, texels.data(), 4, s, cellBeta(a, b));
+    }
+  };
+  for (int colour = 0; colour < 2; ++colour) {
+    tbb::parallel_for(0, (bandCount + 1 - colour) / 2, [&](int half) {
+      const int b = 2 * half + colour;
+      for (int64_t i = fullBandBegin[b]; i < fullBandBegin[b + 1]; ++i)
+        plain(full[i].face, full[i].cellX, full[i].cellY, unit);
+      for (int64_t i = partialBandBegin[b]; i < partialBandBegin[b + 1]; ++i)
+        plain(partial[i].face, partial[i].cellX, partial[i].cellY,
+              detail::bilinearIntegrals(partial[i].moments));
+    });
+  }
+  for (const SeamPiece& sp : seam) {
+    const int k = sp.texelEnd - sp.texelBegin;
+    const FaceFactors& f = factors[sp.face];
+    const double* v = seamValues.data() + sp.valueBegin;
+    using Map = Eigen::Map<const Eigen::MatrixXd>;
+    const Map localMass(v, k, k), kxx(v + k * k, k, k), kxy(v + 2 * k * k, k, k), kyy(v + 3 * k * k, k, k);
+    if (massOut) scatter(*massOut, seamTexels.data() + sp.texelBegin, k, localMass, f.mass);
+    if (stiffnessOut) {
+      const Eigen::MatrixXd s = f.xx * kxx + f.xy * kxy + f.yy * kyy;
+      scatter(*stiffnessOut, seamTexels.data() + sp.texelBegin, k, s, cellBeta(sp.cellX, sp.cellY));
+    }
+  }
+}
+
+TexelOperators::TexelOperators(const TexturedMesh& mesh, const Atlas& atlas,
+                               const TexelGrid& grid, const OperatorOptions& options,
+                               const ProgressCallback& progress) {
+  options.validate();
+  impl_ = std::make_unique<Impl>(mesh, atlas, grid, options);
+  reportProgress(progress, "integrate pieces", 0.0);
+  impl_->integratePieces(progress);
+  impl_->buildPattern();
+  reportProgress(progress, "assemble", 0.8);
+  setMetric(fem::immersionMetric(mesh, grid, &impl_->report.metric));
+  reportProgress(progress, "assemble", 1.0);
+}
+
+TexelOperators::~TexelOperators() = default;
+
+void TexelOperators::setMetric(std::vector<Eigen::Matrix2d> metric) {
+  if (static_cast<int>(metric.size()) != impl_->basis.faceCount())
+    throw InvalidInputError("setMetric: expected one 2x2 metric per face (" +
+                            std::to_string(impl_->basis.faceCount()) + "), got " +
+                            std::to_string(metric.size()));
+  impl_->factors.assign(metric.size(), {});
+  for (size_t f = 0; f < metric.size(); ++f) {
+    if (!impl_->basis.faceValid(static_cast<int>(f))) continue;
+    const Eigen::Matrix2d& g = metric[f];
+    const double det = g.determinant();
+    if (!(det > 0.0) || !(g(0, 0) > 0.0) || !std::isfinite(det) || g(0, 1) != g(1, 0))
+      throw InvalidInputError("setMetric: the metric of face " + std::to_string(f) +
+                              " is not symmetric positive definite");
+    const double root = std::sqrt(det);
+    impl_->factors[f] = {root, root * g(1, 1) / det, -root * g(0, 1) / det, root * g(0, 0) / det};
+  }
+  impl_->metric = std::move(metric);
+  impl_->assemble(nullptr, &impl_->mass, &impl_->stiffness);
+}
+
+const std::vector<Eigen::Matrix2d>& TexelOperators::metric() const { return impl_->metric; }
+const SparseMatrixd& TexelOperators::mass() const { return impl_->mass; }
+const SparseMatrixd& TexelOperators::stiffness() const { return impl_->stiffness; }
+const fem::TexelBasis& TexelOperators::basis() const { return impl_->basis; }
+const OperatorReport& TexelOperators::report() const { return impl_->report; }
+
+SparseMatrixd TexelOperators::modulatedStiffness(std::span<const double> betaPerCell) const {
+  const TexelGrid& grid = impl_->basis.grid();
+  if (betaPerCell.size() != static_cast<size_t>(grid.nx + 1) * (grid.ny + 1))
+    throw InvalidInputError("modulatedStiffness: expected one beta per grid cell");
+  SparseMatrixd s;
+  impl_->assemble(betaPerCell.data(), nullptr, &s);
+  return s;
+}
+
+std::vector<std::pair<int32_t, int32_t>> TexelOperators::texelPairs() const {
+  std::vector<std::pair<int32_t, int32_t>> pairs;
+  const SparseMatrixd& p = impl_->pattern;
+  for (int s = 0; s < p.outerSize(); ++s)
+    for (int k = p.outerIndexPtr()[s]; k < p.outerIndexPtr()[s + 1]; ++k)
+      if (p.innerIndexPtr()[k] > s) pairs.emplace_back(s, p.innerIndexPtr()[k]);
+  return pairs;
+}
+
+SparseMatrixd TexelOperators::differential() const {
+  const auto pairs = texelPairs();
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(2 * pairs.size());
+  for (size_t a = 0; a < pairs.size(); ++a) {
+    triplets.emplace_back(static_cast<int>(a), pairs[a].first, -1.0);
+    triplets.emplace_back(static_cast<int>(a), pairs[a].second, 1.0);
+  }
+  SparseMatrixd d(static_cast<Eigen::Index>(pairs.size()), impl_->pattern.rows());
+  d.setFromTriplets(triplets.begin(), triplets.end());
+  return d;
+}
+
+MassStiffness buildMassStiffness(const TexturedMesh& mesh, const Atlas& atlas,
+                                 const TexelGrid& grid, const OperatorOptions& options) {
+  TexelOperators ops(mesh, atlas, grid, options);
+  return {ops.mass(), ops.stiffness()};
+}
+
+}  // namespace texgrad

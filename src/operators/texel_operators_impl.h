@@ -1,0 +1,61 @@
+// State of TexelOperators (private to operators/): per-piece metric-independent integrals grouped
+// by cell-row band, the shared sparsity pattern, and the assembled matrices.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "piece_integrals.h"
+#include "texgrad/operators/texel_operators.h"
+
+namespace texgrad {
+
+struct TexelOperators::Impl {
+  /// Piece that is a whole cell with bilinear basis.
+  struct FullPiece {
+    int32_t face, cellX, cellY;
+  };
+  /// Bilinear piece that is part of a cell.
+  struct PartialPiece {
+    int32_t face, cellX, cellY;
+    detail::Moments moments;
+  };
+  /// Piece touching a seam: local texels and packed k x k integrals (mass, kxx, kxy, kyy).
+  struct SeamPiece {
+    int32_t face, cellX, cellY;
+    int32_t texelBegin, texelEnd;
+    int64_t valueBegin;
+  };
+  /// Metric factors of a face: sqrt|g| and sqrt|g| g^-1 (xx, xy, yy).
+  struct FaceFactors {
+    double mass = 0.0, xx = 0.0, xy = 0.0, yy = 0.0;
+  };
+
+  Impl(const TexturedMesh& mesh, const Atlas& atlas, const TexelGrid& grid,
+       const OperatorOptions& opts)
+      : options(opts), basis(mesh, atlas, grid, {opts.basis}) {}
+
+  void integratePieces(const ProgressCallback& progress);
+  void buildPattern();
+  void assemble(const double* beta, SparseMatrixd* mass, SparseMatrixd* stiffness) const;
+  int band(int cellY) const;
+
+  OperatorOptions options;
+  fem::TexelBasis basis;
+  OperatorReport report;
+  std::vector<Eigen::Matrix2d> metric;
+  std::vector<FaceFactors> factors;
+  // Pieces sorted by band (stable); bandBegin* index the first piece of each band.
+  std::vector<FullPiece> full;
+  std::vector<PartialPiece> partial;
+  std::vector<SeamPiece> seam;
+  std::vector<int32_t> seamTexels;
+  std::vector<double> seamValues;
+  std::vector<int64_t> fullBandBegin, partialBandBegin;
+  int bandCount = 0;
+  std::vector<uint8_t> cellCovered;  ///< per grid cell: some piece has positive area
+  SparseMatrixd pattern;             ///< shared structure (values zero)
+  SparseMatrixd mass, stiffness;
+};
+
+}  // namespace texgrad

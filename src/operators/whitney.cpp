@@ -1,0 +1,124 @@
+// Quadrature-based operators that need basis values at points: the Whitney Hodge star *1
+// (degree 6, paper Sec. 5.2) and the right-hand sides mass_h(psi), div_h(omega) (paper Sec. 5.3).
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+#include "texel_operators_impl.h"
+
+namespace texgrad {
+namespace {
+
+constexpr int kHodgeStarDegree = 6;  // omega_a . omega_b: cubic x cubic
+
+/// Calls visit(face, point, weight, texels, values, gradients) at every quadrature point of M,
+/// face chunks in parallel; each chunk's results go to its own buffer (reduced in chunk order).
+template <typename Buffer, typename Visit>
+std::vector<Buffer> sampleSurface(const fem::TexelBasis& basis, int grain, int degree,
+                                  Visit&& visit) {
+  const int faces = basis.faceCount();
+  const int chunks = (faces + grain - 1) / grain;
+  std::vector<Buffer> buffers(chunks);
+  tbb::parallel_for(0, chunks, [&](int c) {
+    FaceClip clip;
+    fem::PieceBasis pb;
+    for (int f = c * grain; f < std::min(faces, (c + 1) * grain); ++f) {
+      basis.clipFace(f, clip);
+      for (const auto& piece : clip.pieces) {
+        const auto poly = clip.polygon(piece);
+        if (basis.isPlain(f, poly)) {
+          const auto cell = basis.cellTexels(piece.cellX, piece.cellY);
+          const std::vector<int32_t> texels(cell.begin(), cell.end());
+          detail::PieceSampler::plain(poly, piece.cellX, piece.cellY, degree,
+                                      [&](const Eigen::Vector2d& p, double w, const auto& v,
+                                          const auto& g) {
+                                        visit(buffers[c], f, p, w, texels, Eigen::VectorXd(v),
+                                              Eigen::MatrixXd(g));
+                                      });
+        } else {
+          basis.buildPieceBasis(f, poly, pb);
+          detail::PieceSampler::quadratic(pb, degree,
+                                          [&](const Eigen::Vector2d& p, double w,
+                                              const Eigen::VectorXd& v, const Eigen::MatrixXd& g) {
+                                            visit(buffers[c], f, p, w, pb.texels, v, g);
+                                          });
+        }
+      }
+    }
+  });
+  return buffers;
+}
+
+using Contributions = std::vector<std::pair<int32_t, double>>;
+
+Eigen::VectorXd reduce(const std::vector<Contributions>& buffers, int n) {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(n);
+  for (const auto& buffer : buffers)
+    for (const auto& [u, v] : buffer) out[u] += v;
+  return out;
+}
+
+}  // namespace
+
+Eigen::VectorXd TexelOperators::massOf(const SurfaceScalar& psi, int degree) const {
+  const auto& factors = impl_->factors;
+  const auto buffers = sampleSurface<Contributions>(
+      impl_->basis, impl_->options.facesPerTask, degree,
+      [&](Contributions& out, int f, const Eigen::Vector2d& p, double w,
+          const std::vector<int32_t>& texels, const Eigen::VectorXd& values, const Eigen::MatrixXd&) {
+        const double value = w * factors[f].mass * psi({f, p});
+        for (size_t k = 0; k < texels.size(); ++k)
+          if (texels[k] >= 0 && values[k] != 0.0) out.emplace_back(texels[k], value * values[k]);
+      });
+  return reduce(buffers, impl_->basis.grid().unknownCount());
+}
+
+Eigen::VectorXd TexelOperators::divergenceOf(const SurfaceOneForm& omega, int degree) const {
+  const auto& factors = impl_->factors;
+  const auto buffers = sampleSurface<Contributions>(
+      impl_->basis, impl_->options.facesPerTask, degree,
+      [&](Contributions& out, int f, const Eigen::Vector2d& p, double w,
+          const std::vector<int32_t>& texels, const Eigen::VectorXd&, const Eigen::MatrixXd& g) {
+        const auto& m = factors[f];
+        const Eigen::Vector2d o = omega({f, p});
+        const Eigen::Vector2d raised(m.xx * o.x() + m.xy * o.y(), m.xy * o.x() + m.yy * o.y());
+        for (size_t k = 0; k < texels.size(); ++k)
+          if (texels[k] >= 0) out.emplace_back(texels[k], w * g.row(k).dot(raised));
+      });
+  return reduce(buffers, impl_->basis.grid().unknownCount());
+}
+
+SparseMatrixd TexelOperators::hodgeStar1() const {
+  const auto pairs = texelPairs();
+  auto pairIndex = [&](int32_t s, int32_t t) {
+    const auto it = std::lower_bound(pairs.begin(), pairs.end(), std::make_pair(s, t));
+    return static_cast<int>(it - pairs.begin());
+  };
+  using Triplets = std::vector<Eigen::Triplet<double>>;
+  const auto& factors = impl_->factors;
+  const auto buffers = sampleSurface<Triplets>(
+      impl_->basis, impl_->options.facesPerTask, kHodgeStarDegree,
+      [&](Triplets& out, int f, const Eigen::Vector2d&, double w, const std::vector<int32_t>& texels,
+          const Eigen::VectorXd& v, const Eigen::MatrixXd& g) {
+        const auto& m = factors[f];
+        std::vector<std::pair<int, Eigen::Vector2d>> forms;  // (pair index, omega_a at the point)
+        for (size_t i = 0; i < texels.size(); ++i)
+          for (size_t j = 0; j < texels.size(); ++j) {
+            if (texels[i] < 0 || texels[j] < 0 || texels[i] >= texels[j]) continue;
+            const Eigen::Vector2d form = v[i] * g.row(j).transpose() - v[j] * g.row(i).transpose();
+            forms.emplace_back(pairIndex(texels[i], texels[j]), form);
+          }
+        for (const auto& [a, wa] : forms) {
+          const Eigen::Vector2d raised(m.xx * wa.x() + m.xy * wa.y(), m.xy * wa.x() + m.yy * wa.y());
+          for (const auto& [b, wb] : forms) out.emplace_back(a, b, w * raised.dot(wb));
+        }
+      });
+  Triplets all;
+  for (const auto& b : buffers) all.insert(all.end(), b.begin(), b.end());
+  const auto n = static_cast<Eigen::Index>(pairs.size());
+  SparseMatrixd star(n, n);
+  star.setFromTriplets(all.begin(), all.end());
+  return star;
+}
+
+}  // namespace texgrad

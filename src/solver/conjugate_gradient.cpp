@@ -1,0 +1,108 @@
+// Solver module: multi-channel preconditioned conjugate gradients with a solve report.
+#include "texgrad/solver/conjugate_gradient.h"
+
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "texgrad/core/error.h"
+
+namespace texgrad {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// Column-wise dot products of two n x k blocks.
+Eigen::RowVectorXd columnDots(const Eigen::MatrixXd& u, const Eigen::MatrixXd& v) {
+  return u.cwiseProduct(v).colwise().sum();
+}
+
+}  // namespace
+
+void CgOptions::validate() const {
+  if (maxIterations < 0)
+    throw InvalidInputError("CG maxIterations is " + std::to_string(maxIterations) +
+                            "; expected >= 0");
+  if (!(tolerance >= 0.0)) throw InvalidInputError("CG tolerance must be >= 0");
+}
+
+void symmetricProduct(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& x,
+                      Eigen::MatrixXd& y) {
+  y.resize(a.rows(), x.cols());
+  const Eigen::Index k = x.cols();
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, a.outerSize(), 1024),
+                    [&](const tbb::blocked_range<Eigen::Index>& range) {
+    for (Eigen::Index j = range.begin(); j != range.end(); ++j) {
+      for (Eigen::Index c = 0; c < k; ++c) {
+        double acc = 0.0;
+        for (Eigen::SparseMatrix<double>::InnerIterator it(a, j); it; ++it)
+          acc += it.value() * x(it.row(), c);
+        y(j, c) = acc;
+      }
+    }
+  });
+}
+
+SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,
+                              Eigen::MatrixXd& x, const Preconditioner& preconditioner,
+                              const CgOptions& options) {
+  options.validate();
+  if (a.rows() != a.cols() || b.rows() != a.rows() || x.rows() != b.rows() || x.cols() != b.cols())
+    throw InvalidInputError("conjugateGradient: A is " + std::to_string(a.rows()) + " x " +
+                            std::to_string(a.cols()) + ", B has " + std::to_string(b.rows()) +
+                            " rows, X is " + std::to_string(x.rows()) + " x " +
+                            std::to_string(x.cols()));
+  SolveReport report;
+  const double bNorm = b.norm();
+  const double scale = bNorm > 0.0 ? 1.0 / bNorm : 1.0;
+  Eigen::MatrixXd r, z, p, ap;
+  auto start = Clock::now();
+  symmetricProduct(a, x, ap);
+  report.times.matvec += secondsSince(start);
+  r = b - ap;
+  auto precondition = [&] {
+    const auto t = Clock::now();
+    if (preconditioner) preconditioner(r, z);
+    else z = r;
+    report.times.preconditioner += secondsSince(t);
+  };
+  precondition();
+  p = z;
+  Eigen::RowVectorXd rz = columnDots(r, z);
+  report.residuals.push_back(r.norm() * scale);
+  while (report.iterations < options.maxIterations && report.residuals.back() > options.tolerance) {
+    start = Clock::now();
+    symmetricProduct(a, p, ap);
+    report.times.matvec += secondsSince(start);
+    start = Clock::now();
+    const Eigen::RowVectorXd pap = columnDots(p, ap);
+    Eigen::RowVectorXd alpha(b.cols());
+    for (Eigen::Index c = 0; c < b.cols(); ++c) alpha(c) = pap(c) > 0.0 ? rz(c) / pap(c) : 0.0;
+    x.noalias() += p * alpha.asDiagonal();
+    r.noalias() -= ap * alpha.asDiagonal();
+    report.rmsChange.push_back((p * alpha.asDiagonal()).norm() /
+                               std::sqrt(std::max<double>(1.0, double(p.size()))));
+    report.times.other += secondsSince(start);
+    precondition();
+    start = Clock::now();
+    const Eigen::RowVectorXd rzNew = columnDots(r, z);
+    for (Eigen::Index c = 0; c < b.cols(); ++c) {
+      const double beta = rz(c) > 0.0 ? rzNew(c) / rz(c) : 0.0;
+      p.col(c) = z.col(c) + beta * p.col(c);
+    }
+    rz = rzNew;
+    ++report.iterations;
+    report.residuals.push_back(r.norm() * scale);
+    report.times.other += secondsSince(start);
+  }
+  report.converged = report.residuals.back() <= options.tolerance;
+  return report;
+}
+
+}  // namespace texgrad

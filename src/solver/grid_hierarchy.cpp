@@ -1,0 +1,179 @@
+// Solver module: builds the per-chart multiresolution texel grids of paper §6.1.
+#include "texgrad/solver/grid_hierarchy.h"
+
+#include <algorithm>
+#include <array>
+#include <limits>
+
+#include "texgrad/core/error.h"
+
+namespace texgrad {
+namespace {
+
+/// Coarse parents of a fine lattice coordinate with their bilinear weights (1, or 1/2 twice).
+struct Parents {
+  int count = 0;
+  std::array<int, 2> index{};
+  std::array<double, 2> weight{};
+};
+
+Parents parentsOf(int fine) {
+  if (fine % 2 == 0) return {1, {fine / 2, 0}, {1.0, 0.0}};
+  return {2, {(fine - 1) / 2, (fine + 1) / 2}, {0.5, 0.5}};
+}
+
+/// Lays out boxes given per-chart inclusive content bounds; charts with empty bounds get no box.
+void layoutBoxes(GridLevel& level, const std::vector<std::array<int, 4>>& bounds) {
+  level.boxOfChart.assign(bounds.size(), -1);
+  int64_t offset = 0;
+  for (size_t c = 0; c < bounds.size(); ++c) {
+    const auto& [xmin, ymin, xmax, ymax] = bounds[c];
+    if (xmin > xmax) continue;
+    GridBox box;
+    box.chart = static_cast<int>(c);
+    box.x0 = xmin - 1;
+    box.y0 = ymin - 1;
+    box.width = xmax - xmin + 3;
+    box.height = ymax - ymin + 3;
+    box.offset = offset;
+    offset += static_cast<int64_t>(box.width) * box.height;
+    level.boxOfChart[c] = static_cast<int32_t>(level.boxes.size());
+    level.boxes.push_back(box);
+  }
+  level.slotCount = offset;
+  level.unknownOfSlot.assign(static_cast<size_t>(offset), -1);
+}
+
+std::array<int, 4> emptyBounds() {
+  constexpr int kMax = std::numeric_limits<int>::max(), kMin = std::numeric_limits<int>::min();
+  return {kMax, kMax, kMin, kMin};
+}
+
+void growBounds(std::array<int, 4>& b, int x, int y) {
+  b = {std::min(b[0], x), std::min(b[1], y), std::max(b[2], x), std::max(b[3], y)};
+}
+
+void pushUnknown(GridLevel& level, int64_t slot, int chart, int x, int y, bool interior) {
+  level.unknownOfSlot[static_cast<size_t>(slot)] = level.unknownCount();
+  level.slotOfUnknown.push_back(slot);
+  level.chartOfUnknown.push_back(chart);
+  level.xOfUnknown.push_back(x);
+  level.yOfUnknown.push_back(y);
+  level.footprintInterior.push_back(interior ? 1 : 0);
+}
+
+GridLevel buildFinestLevel(const TexelGrid& grid, int chartCount) {
+  GridLevel level;
+  std::vector<std::array<int, 4>> bounds(static_cast<size_t>(chartCount), emptyBounds());
+  for (int u = 0; u < grid.unknownCount(); ++u) {
+    const int t = grid.texelOfUnknown[static_cast<size_t>(u)];
+    growBounds(bounds[static_cast<size_t>(grid.texelChart[static_cast<size_t>(t)])], t % grid.nx,
+               t / grid.nx);
+  }
+  layoutBoxes(level, bounds);
+  for (int u = 0; u < grid.unknownCount(); ++u) {
+    const size_t t = static_cast<size_t>(grid.texelOfUnknown[static_cast<size_t>(u)]);
+    const int chart = grid.texelChart[t];
+    const int x = static_cast<int>(t) % grid.nx, y = static_cast<int>(t) / grid.nx;
+    const GridBox& box = level.boxes[static_cast<size_t>(level.boxOfChart[static_cast<size_t>(chart)])];
+    pushUnknown(level, box.slot(x, y), chart, x, y, grid.texelClass[t] == TexelClass::Interior);
+  }
+  return level;
+}
+
+/// Level l + 1: coarse lattice nodes that are bilinear parents of a level-l texel of the same chart
+/// (equivalently, whose doubled footprint meets the chart).
+GridLevel buildCoarseLevel(const GridLevel& fine) {
+  GridLevel coarse;
+  std::vector<std::array<int, 4>> bounds(fine.boxOfChart.size(), emptyBounds());
+  for (const GridBox& b : fine.boxes) {
+    bounds[static_cast<size_t>(b.chart)] = {(b.x0 + 1) / 2, (b.y0 + 1) / 2,
+                                            (b.x0 + b.width - 1) / 2, (b.y0 + b.height - 1) / 2};
+  }
+  layoutBoxes(coarse, bounds);
+  std::vector<uint8_t> used(static_cast<size_t>(coarse.slotCount), 0);
+  for (int u = 0; u < fine.unknownCount(); ++u) {
+    const size_t su = static_cast<size_t>(u);
+    const GridBox& box = coarse.boxes[static_cast<size_t>(
+        coarse.boxOfChart[static_cast<size_t>(fine.chartOfUnknown[su])])];
+    const Parents px = parentsOf(fine.xOfUnknown[su]), py = parentsOf(fine.yOfUnknown[su]);
+    for (int j = 0; j < py.count; ++j)
+      for (int i = 0; i < px.count; ++i)
+        used[static_cast<size_t>(box.slot(px.index[static_cast<size_t>(i)],
+                                          py.index[static_cast<size_t>(j)]))] = 1;
+  }
+  for (const GridBox& box : coarse.boxes) {
+    const GridBox& fbox = fine.boxes[static_cast<size_t>(fine.boxOfChart[static_cast<size_t>(box.chart)])];
+    for (int y = box.y0; y < box.y0 + box.height; ++y) {
+      for (int x = box.x0; x < box.x0 + box.width; ++x) {
+        const int64_t s = box.slot(x, y);
+        if (!used[static_cast<size_t>(s)]) continue;
+        bool interior = true;  // all 9 children exist and are footprint-interior
+        for (int dy = -1; dy <= 1 && interior; ++dy)
+          for (int dx = -1; dx <= 1 && interior; ++dx) {
+            const int fx = 2 * x + dx, fy = 2 * y + dy;
+            const int fu = fbox.contains(fx, fy)
+                               ? fine.unknownOfSlot[static_cast<size_t>(fbox.slot(fx, fy))]
+                               : -1;
+            interior = fu >= 0 && fine.footprintInterior[static_cast<size_t>(fu)];
+          }
+        pushUnknown(coarse, s, box.chart, x, y, interior);
+      }
+    }
+  }
+  return coarse;
+}
+
+Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridLevel& coarse) {
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(static_cast<size_t>(fine.unknownCount()) * 4);
+  for (int u = 0; u < fine.unknownCount(); ++u) {
+    const size_t su = static_cast<size_t>(u);
+    const GridBox& box = coarse.boxes[static_cast<size_t>(
+        coarse.boxOfChart[static_cast<size_t>(fine.chartOfUnknown[su])])];
+    const Parents px = parentsOf(fine.xOfUnknown[su]), py = parentsOf(fine.yOfUnknown[su]);
+    for (int j = 0; j < py.count; ++j)
+      for (int i = 0; i < px.count; ++i) {
+        const int64_t s = box.slot(px.index[static_cast<size_t>(i)], py.index[static_cast<size_t>(j)]);
+        triplets.emplace_back(u, coarse.unknownOfSlot[static_cast<size_t>(s)],
+                              px.weight[static_cast<size_t>(i)] * py.weight[static_cast<size_t>(j)]);
+      }
+  }
+  Eigen::SparseMatrix<double> p(fine.unknownCount(), coarse.unknownCount());
+  p.setFromTriplets(triplets.begin(), triplets.end());
+  return p;
+}
+
+}  // namespace
+
+GridHierarchy GridHierarchy::build(const TexelGrid& grid, int maxLevels, int minCoarseUnknowns) {
+  if (maxLevels < 0)
+    throw InvalidInputError("GridHierarchy: maxLevels is " + std::to_string(maxLevels) +
+                            ", expected >= 0");
+  if (static_cast<int>(grid.texelOfUnknown.size()) != grid.unknownCount() ||
+      grid.texelChart.size() != static_cast<size_t>(grid.nx) * static_cast<size_t>(grid.ny) ||
+      grid.texelClass.size() != grid.texelChart.size())
+    throw InvalidInputError("GridHierarchy: TexelGrid arrays do not match its nx x ny size");
+  GridHierarchy h;
+  for (int u = 0; u < grid.unknownCount(); ++u) {
+    const int t = grid.texelOfUnknown[static_cast<size_t>(u)];
+    const int chart = grid.texelChart[static_cast<size_t>(t)];
+    if (chart < 0)
+      throw InvalidInputError("GridHierarchy: active texel " + std::to_string(t) +
+                              " has no chart in the TexelGrid");
+    h.chartCount_ = std::max(h.chartCount_, chart + 1);
+  }
+  h.levels_.push_back(buildFinestLevel(grid, h.chartCount_));
+  while (h.levelCount() <= maxLevels) {
+    const GridLevel& fine = h.levels_.back();
+    const bool anyInterior = std::any_of(fine.footprintInterior.begin(),
+                                         fine.footprintInterior.end(), [](uint8_t v) { return v; });
+    if (fine.unknownCount() < minCoarseUnknowns || !anyInterior) break;
+    GridLevel coarse = buildCoarseLevel(fine);
+    h.prolongations_.push_back(buildProlongation(fine, coarse));
+    h.levels_.push_back(std::move(coarse));
+  }
+  return h;
+}
+
+}  // namespace texgrad

@@ -1,0 +1,464 @@
+// Solver module: the texel-grid multigrid V-cycle of paper §6.2 (Fig. 8) over per-chart grids,
+// with CHOLMOD for boundary blocks and the coarsest level.
+#include "texgrad/solver/multigrid_solver.h"
+
+#include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+#include "solver/grid_kernels.h"
+#include "texgrad/core/error.h"
+
+namespace texgrad {
+namespace detail {
+
+std::vector<BoxRow> boxRowsOf(const GridLevel& level) {
+  std::vector<BoxRow> rows;
+  for (size_t b = 0; b < level.boxes.size(); ++b)
+    for (int r = 0; r < level.boxes[b].height; ++r)
+      rows.push_back({static_cast<int>(b), level.boxes[b].y0 + r});
+  return rows;
+}
+
+}  // namespace detail
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// Sum of squares of v[0, n), with a split that does not depend on the thread count.
+template <typename T>
+double sumOfSquares(const T* v, size_t n) {
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<size_t>(0, n, 1 << 16), 0.0,
+      [&](const tbb::blocked_range<size_t>& r, double acc) {
+        for (size_t i = r.begin(); i != r.end(); ++i) acc += double(v[i]) * double(v[i]);
+        return acc;
+      },
+      [](double a, double b) { return a + b; });
+}
+
+}  // namespace
+
+void MultigridOptions::validate() const {
+  if (levels < 0 || levels > 16)
+    throw InvalidInputError("multigrid levels is " + std::to_string(levels) +
+                            "; expected 0 to 16 (paper default 4)");
+  if (sweeps < 1 || sweeps > 100)
+    throw InvalidInputError("multigrid sweeps is " + std::to_string(sweeps) +
+                            "; expected 1 to 100 (paper default 3)");
+  if (minCoarseUnknowns < 1)
+    throw InvalidInputError("multigrid minCoarseUnknowns is " +
+                            std::to_string(minCoarseUnknowns) + "; expected >= 1");
+  if (threads < 0)
+    throw InvalidInputError("multigrid threads is " + std::to_string(threads) +
+                            "; expected >= 0 (0 = all cores)");
+}
+
+void SolveControl::validate() const {
+  if (maxCycles < 0)
+    throw InvalidInputError("maxCycles is " + std::to_string(maxCycles) + "; expected >= 0");
+  if (!(tolerance >= 0.0))
+    throw InvalidInputError("tolerance must be >= 0 (0 runs all cycles)");
+}
+
+template <typename Scalar>
+struct MultigridSolver<Scalar>::Impl {
+  using T = Scalar;
+  struct Level {
+    detail::LevelSystem sys;
+    std::vector<T> stencil, x, b, r;
+    std::vector<detail::BoxRow> boxRows;
+    Eigen::MatrixXd work;
+  };
+
+  MultigridOptions options;
+  GridHierarchy hierarchy;
+  std::vector<Level> levels;
+  std::vector<int64_t> nonZeros;  // per level, of A^l
+  CholmodSolver coarseSolver;
+  Eigen::MatrixXd coarseWork;
+  MultigridStats stats;
+  PhaseTimes times;
+  int channels = 0;
+  bool initialised = false, updated = false;
+  tbb::task_arena arena;
+
+  explicit Impl(const MultigridOptions& o)
+      : options(o), arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic) {}
+
+  int coarsest() const { return hierarchy.levelCount() - 1; }
+
+  static Eigen::SparseMatrix<double> galerkin(const Eigen::SparseMatrix<double>& a,
+                                              const Eigen::SparseMatrix<double>& p) {
+    const Eigen::SparseMatrix<double> ap = a * p;
+    return Eigen::SparseMatrix<double>(p.transpose() * ap);
+  }
+
+  void refreshCounters() {
+    stats.symbolicAnalyses = coarseSolver.stats().analyses;
+    stats.numericFactorizations = coarseSolver.stats().factorizations;
+    for (const Level& lv : levels) {
+      stats.symbolicAnalyses += lv.sys.boundarySolver.stats().analyses;
+      stats.numericFactorizations += lv.sys.boundarySolver.stats().factorizations;
+    }
+  }
+
+  void symbolic(const Eigen::SparseMatrix<double>& pattern) {
+    const auto start = Clock::now();
+    levels.clear();
+    levels.resize(static_cast<size_t>(hierarchy.levelCount()));
+    nonZeros.assign(levels.size(), 0);
+    coarseSolver = CholmodSolver();
+    Eigen::SparseMatrix<double> a = detail::onesLike(pattern);
+    for (int l = 0; l <= coarsest(); ++l) {
+      Level& lv = levels[static_cast<size_t>(l)];
+      lv.boxRows = detail::boxRowsOf(hierarchy.level(l));
+      nonZeros[static_cast<size_t>(l)] = a.nonZeros();
+      if (l < coarsest() || l == 0) detail::classifyLevel(hierarchy.level(l), a, lv.sys);
+      if (l == coarsest()) coarseSolver.analyzePattern(a);
+      else a = galerkin(a, hierarchy.prolongation(l));
+    }
+    initialised = true;
+    updated = false;
+    channels = 0;
+    ++stats.inits;
+    stats.initSeconds += secondsSince(start);
+    refreshCounters();
+  }
+
+  void numeric(const Eigen::SparseMatrix<double>& a0) {
+    if (!initialised) throw InvalidInputError("MultigridSolver::update called before init");
+    const auto start = Clock::now();
+    Eigen::SparseMatrix<double> a = a0;
+    for (int l = 0; l <= coarsest(); ++l) {
+      if (a.nonZeros() != nonZeros[static_cast<size_t>(l)] ||
+          a.rows() != hierarchy.level(l).unknownCount())
+        throw InvalidInputError("MultigridSolver::update: level " + std::to_string(l) +
+                                " matrix has " + std::to_string(a.nonZeros()) +
+                                " non-zeros, the pattern given to init has " +
+                                std::to_string(nonZeros[static_cast<size_t>(l)]) +
+                                "; call init again when the sparsity changes");
+      Level& lv = levels[static_cast<size_t>(l)];
+      if (l < coarsest() || l == 0) {
+        detail::assignBoundary(hierarchy.level(l), a, lv.sys);
+        detail::assignStencils<T>(hierarchy.level(l), a, lv.sys, lv.stencil);
+      }
+      if (l == coarsest()) coarseSolver.factorize(a);
+      else a = galerkin(a, hierarchy.prolongation(l));
+    }
+    updated = true;
+    times = {};
+    ++stats.updates;
+    stats.updateSeconds += secondsSince(start);
+    refreshCounters();
+  }
+
+  void ensureChannels(int k) {
+    if (!updated) throw InvalidInputError("MultigridSolver: cycle called before update");
+    if (k == channels) return;
+    for (int l = 0; l <= coarsest(); ++l) {
+      Level& lv = levels[static_cast<size_t>(l)];
+      const size_t n = static_cast<size_t>(hierarchy.level(l).slotCount) * static_cast<size_t>(k);
+      lv.x.assign(n, T(0));
+      lv.b.assign(n, T(0));
+      lv.r.assign(n, T(0));
+    }
+    channels = k;
+  }
+
+  template <typename Src>
+  void scatter(const Src& m, std::vector<T>& dst) {
+    const GridLevel& g = hierarchy.level(0);
+    const int k = channels;
+    tbb::parallel_for(0, g.unknownCount(), [&](int u) {
+      const int64_t s = g.slotOfUnknown[static_cast<size_t>(u)];
+      for (int c = 0; c < k; ++c) dst[static_cast<size_t>(s * k + c)] = static_cast<T>(m(u, c));
+    });
+  }
+
+  template <typename Dst>
+  void gather(const std::vector<T>& src, Dst& m) {
+    const GridLevel& g = hierarchy.level(0);
+    const int k = channels;
+    tbb::parallel_for(0, g.unknownCount(), [&](int u) {
+      const int64_t s = g.slotOfUnknown[static_cast<size_t>(u)];
+      for (int c = 0; c < k; ++c)
+        m(u, c) = static_cast<typename Dst::Scalar>(src[static_cast<size_t>(s * k + c)]);
+    });
+  }
+
+  void relax(Level& lv, bool forward) {
+    const auto start = Clock::now();
+    for (int i = 0; i < options.sweeps; ++i)
+      detail::relaxInterior(lv.sys, lv.stencil.data(), lv.b.data(), lv.x.data(), channels, forward);
+    times.relaxation += secondsSince(start);
+  }
+
+  void boundary(Level& lv) {
+    const auto start = Clock::now();
+    detail::solveBoundary(lv.sys, lv.b.data(), lv.x.data(), channels, lv.work);
+    times.boundary += secondsSince(start);
+  }
+
+  void coarseSolve() {
+    const auto start = Clock::now();
+    const GridLevel& g = hierarchy.level(coarsest());
+    Level& lv = levels.back();
+    const int k = channels;
+    coarseWork.resize(g.unknownCount(), k);
+    for (int u = 0; u < g.unknownCount(); ++u)
+      for (int c = 0; c < k; ++c)
+        coarseWork(u, c) = double(lv.b[static_cast<size_t>(g.slotOfUnknown[static_cast<size_t>(u)] * k + c)]);
+    coarseSolver.solveInPlace(coarseWork);
+    for (int u = 0; u < g.unknownCount(); ++u)
+      for (int c = 0; c < k; ++c)
+        lv.x[static_cast<size_t>(g.slotOfUnknown[static_cast<size_t>(u)] * k + c)] = static_cast<T>(coarseWork(u, c));
+    times.coarse += secondsSince(start);
+  }
+
+  /// Fig. 8 on the slot vectors; level 0 holds b and the current x.
+  void vCycle() {
+    const int L = coarsest();
+    for (int l = 0; l < L; ++l) {
+      Level& lv = levels[static_cast<size_t>(l)];
+      if (l > 0) std::fill(lv.x.begin(), lv.x.end(), T(0));
+      relax(lv, true);  // R.2–R.3
+      boundary(lv);     // R.4–R.5
+      const auto start = Clock::now();
+      detail::levelResidual(lv.sys, lv.stencil.data(), lv.b.data(), lv.x.data(), lv.r.data(),
+                            channels, lv.work);  // R.6
+      detail::restrictResidual(hierarchy.level(l), hierarchy.level(l + 1),
+                               levels[static_cast<size_t>(l) + 1].boxRows, lv.r.data(),
+                               levels[static_cast<size_t>(l) + 1].b.data(), channels);
+      times.transfer += secondsSince(start);
+    }
+    coarseSolve();  // C.1
+    for (int l = L - 1; l >= 0; --l) {
+      Level& lv = levels[static_cast<size_t>(l)];
+      const auto start = Clock::now();
+      detail::prolongCorrection(hierarchy.level(l), hierarchy.level(l + 1), lv.boxRows,
+                                levels[static_cast<size_t>(l) + 1].x.data(), lv.x.data(),
+                                channels);  // P.2
+      times.transfer += secondsSince(start);
+      boundary(lv);      // P.3–P.4
+      relax(lv, false);  // P.5–P.6, mirrored colour order
+    }
+  }
+
+  /// ||b - A x||_F at level 0 (uses level 0's r as scratch).
+  double residualNorm() {
+    Level& lv = levels.front();
+    detail::levelResidual(lv.sys, lv.stencil.data(), lv.b.data(), lv.x.data(), lv.r.data(),
+                          channels, lv.work);
+    return std::sqrt(sumOfSquares(lv.r.data(), lv.r.size()));
+  }
+
+  SolveReport solveSlots(const SolveControl& control, int unknowns) {
+    SolveReport report;
+    const auto start = Clock::now();
+    Level& lv = levels.front();
+    const double bNorm = std::sqrt(sumOfSquares(lv.b.data(), lv.b.size()));
+    const double scale = bNorm > 0.0 ? 1.0 / bNorm : 1.0;
+    report.residuals.push_back(residualNorm() * scale);
+    std::vector<T> previous;
+    times.other += secondsSince(start);
+    while (report.iterations < control.maxCycles &&
+           !(control.tolerance > 0.0 && report.residuals.back() <= control.tolerance)) {
+      previous = lv.x;
+      vCycle();
+      const auto tail = Clock::now();
+      const double change = tbb::parallel_deterministic_reduce(
+          tbb::blocked_range<size_t>(0, previous.size(), 1 << 16), 0.0,
+          [&](const tbb::blocked_range<size_t>& r, double acc) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+              const double d = double(lv.x[i]) - double(previous[i]);
+              acc += d * d;
+            }
+            return acc;
+          },
+          [](double a, double b) { return a + b; });
+      report.rmsChange.push_back(std::sqrt(change / std::max(1.0, double(unknowns) * channels)));
+      report.residuals.push_back(residualNorm() * scale);
+      ++report.iterations;
+      times.other += secondsSince(tail);
+    }
+    report.converged = control.tolerance > 0.0 && report.residuals.back() <= control.tolerance;
+    return report;
+  }
+};
+
+template <typename Scalar>
+MultigridSolver<Scalar>::MultigridSolver(const MultigridOptions& options) {
+  options.validate();
+  impl_ = std::make_unique<Impl>(options);
+}
+template <typename Scalar>
+MultigridSolver<Scalar>::~MultigridSolver() = default;
+template <typename Scalar>
+MultigridSolver<Scalar>::MultigridSolver(MultigridSolver&&) noexcept = default;
+template <typename Scalar>
+MultigridSolver<Scalar>& MultigridSolver<Scalar>::operator=(MultigridSolver&&) noexcept = default;
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::init(const TexelGrid& grid, const Eigen::SparseMatrix<double>& pattern) {
+  impl_->arena.execute([&] {
+    const auto start = Clock::now();
+    impl_->hierarchy = GridHierarchy::build(grid, impl_->options.levels,
+                                            impl_->options.minCoarseUnknowns);
+    impl_->stats.initSeconds += secondsSince(start);
+    impl_->symbolic(pattern);
+  });
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::update(const Eigen::SparseMatrix<double>& a) {
+  impl_->arena.execute([&] { impl_->numeric(a); });
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::cycle(const Matrix& b, Matrix& x) {
+  const int n = impl_->hierarchy.levelCount() > 0 ? impl_->hierarchy.level(0).unknownCount() : 0;
+  if (b.rows() != n || x.rows() != n || x.cols() != b.cols())
+    throw InvalidInputError("MultigridSolver::cycle: b and x must both be " + std::to_string(n) +
+                            " x k");
+  impl_->arena.execute([&] {
+    impl_->ensureChannels(static_cast<int>(b.cols()));
+    const double before = impl_->times.total();
+    const auto start = Clock::now();
+    impl_->scatter(b, impl_->levels.front().b);
+    impl_->scatter(x, impl_->levels.front().x);
+    impl_->vCycle();
+    impl_->gather(impl_->levels.front().x, x);
+    impl_->times.other += secondsSince(start) - (impl_->times.total() - before);
+  });
+}
+
+template <typename Scalar>
+SolveReport MultigridSolver<Scalar>::solve(const Matrix& b, Matrix& x, const SolveControl& control) {
+  control.validate();
+  const int n = impl_->hierarchy.levelCount() > 0 ? impl_->hierarchy.level(0).unknownCount() : 0;
+  if (b.rows() != n || x.rows() != n || x.cols() != b.cols())
+    throw InvalidInputError("MultigridSolver::solve: b is " + std::to_string(b.rows()) + " x " +
+                            std::to_string(b.cols()) + " and x is " + std::to_string(x.rows()) +
+                            " x " + std::to_string(x.cols()) + "; expected " +
+                            std::to_string(n) + " rows each and equal channel counts");
+  SolveReport report;
+  impl_->arena.execute([&] {
+    impl_->ensureChannels(static_cast<int>(b.cols()));
+    const PhaseTimes before = impl_->times;
+    const auto start = Clock::now();
+    impl_->scatter(b, impl_->levels.front().b);
+    impl_->scatter(x, impl_->levels.front().x);
+    impl_->times.other += secondsSince(start);
+    report = impl_->solveSlots(control, n);
+    const auto tail = Clock::now();
+    impl_->gather(impl_->levels.front().x, x);
+    impl_->times.other += secondsSince(tail);
+    const PhaseTimes& after = impl_->times;
+    report.times.relaxation = after.relaxation - before.relaxation;
+    report.times.boundary = after.boundary - before.boundary;
+    report.times.coarse = after.coarse - before.coarse;
+    report.times.transfer = after.transfer - before.transfer;
+    report.times.other = after.other - before.other;
+  });
+  return report;
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::precondition(const Eigen::MatrixXd& r, Eigen::MatrixXd& z) const {
+  Impl& m = *impl_;
+  z.resize(r.rows(), r.cols());
+  m.arena.execute([&] {
+    m.ensureChannels(static_cast<int>(r.cols()));
+    m.scatter(r, m.levels.front().b);
+    std::fill(m.levels.front().x.begin(), m.levels.front().x.end(), Scalar(0));
+    m.vCycle();
+    m.gather(m.levels.front().x, z);
+  });
+}
+
+template <typename Scalar>
+MultigridSolver<Scalar>& MultigridSolver<Scalar>::analyzePattern(const Eigen::SparseMatrix<double>& a) {
+  if (impl_->hierarchy.levelCount() == 0)
+    throw InvalidInputError("MultigridSolver::analyzePattern: call init(grid, pattern) first");
+  impl_->arena.execute([&] { impl_->symbolic(a); });
+  return *this;
+}
+
+template <typename Scalar>
+MultigridSolver<Scalar>& MultigridSolver<Scalar>::factorize(const Eigen::SparseMatrix<double>& a) {
+  update(a);
+  return *this;
+}
+
+template <typename Scalar>
+MultigridSolver<Scalar>& MultigridSolver<Scalar>::compute(const Eigen::SparseMatrix<double>& a) {
+  update(a);
+  return *this;
+}
+
+template <typename Scalar>
+Eigen::VectorXd MultigridSolver<Scalar>::solve(const Eigen::VectorXd& r) const {
+  Eigen::MatrixXd z;
+  precondition(r, z);
+  return z.col(0);
+}
+
+template <typename Scalar>
+Eigen::ComputationInfo MultigridSolver<Scalar>::info() const {
+  return impl_->updated ? Eigen::Success : Eigen::InvalidInput;
+}
+
+template <typename Scalar>
+const GridHierarchy& MultigridSolver<Scalar>::hierarchy() const { return impl_->hierarchy; }
+template <typename Scalar>
+const MultigridStats& MultigridSolver<Scalar>::stats() const { return impl_->stats; }
+template <typename Scalar>
+const PhaseTimes& MultigridSolver<Scalar>::cycleTimes() const { return impl_->times; }
+template <typename Scalar>
+const MultigridOptions& MultigridSolver<Scalar>::options() const { return impl_->options; }
+
+template <typename Scalar>
+std::string MultigridSolver<Scalar>::summary() const {
+  const Impl& m = *impl_;
+  std::ostringstream os;
+  os << "multigrid (" << (sizeof(Scalar) == 4 ? "float" : "double") << "): "
+     << m.hierarchy.levelCount() << " levels, " << m.options.sweeps << " sweeps, "
+     << m.hierarchy.chartCount() << " charts\n";
+  os << "level  unknowns  interior  boundary   nnz(A)  nnz(A_bb)   slots\n";
+  for (int l = 0; l < m.hierarchy.levelCount(); ++l) {
+    const GridLevel& g = m.hierarchy.level(l);
+    const auto& sys = m.levels[static_cast<size_t>(l)].sys;
+    const bool direct = l == m.coarsest();
+    os << std::setw(5) << l << std::setw(10) << g.unknownCount();
+    if (direct && l > 0) os << std::setw(10) << "-" << std::setw(10) << "direct";
+    else os << std::setw(10) << sys.interiorCount() << std::setw(10) << sys.boundaryCount();
+    os << std::setw(9) << m.nonZeros[static_cast<size_t>(l)] << std::setw(11)
+       << (direct && l > 0 ? m.nonZeros[static_cast<size_t>(l)] : sys.boundaryNonZeros)
+       << std::setw(8) << g.slotCount << "\n";
+  }
+  return os.str();
+}
+
+template <typename Scalar>
+std::ostream& operator<<(std::ostream& os, const MultigridSolver<Scalar>& solver) {
+  return os << solver.summary();
+}
+
+template class MultigridSolver<float>;
+template class MultigridSolver<double>;
+template std::ostream& operator<<(std::ostream&, const MultigridSolver<float>&);
+template std::ostream& operator<<(std::ostream&, const MultigridSolver<double>&);
+
+}  // namespace texgrad

@@ -1,0 +1,36 @@
+// Solver module: summaries of solve reports.
+#include "texgrad/solver/solve_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+namespace texgrad {
+
+double SolveReport::convergenceFactor(int window) const {
+  const int n = static_cast<int>(residuals.size()) - 1;
+  const int w = std::min(window, n);
+  if (w <= 0) return 0.0;
+  const double first = residuals[static_cast<size_t>(n - w)], last = residuals[static_cast<size_t>(n)];
+  if (!(first > 0.0)) return 0.0;
+  return std::pow(last / first, 1.0 / w);
+}
+
+std::string SolveReport::toString() const {
+  std::ostringstream os;
+  os << "iterations " << iterations << (converged ? " (converged)" : " (not converged)") << "\n";
+  os << std::scientific << std::setprecision(3);
+  for (size_t i = 0; i < residuals.size(); ++i) {
+    os << "  " << std::setw(3) << i << "  residual " << residuals[i];
+    if (i > 0 && i - 1 < rmsChange.size()) os << "  rms change " << rmsChange[i - 1];
+    os << "\n";
+  }
+  os << std::fixed << std::setprecision(4) << "  seconds: relaxation " << times.relaxation
+     << ", boundary " << times.boundary << ", coarse " << times.coarse << ", transfer "
+     << times.transfer << ", matvec " << times.matvec << ", preconditioner "
+     << times.preconditioner << ", other " << times.other << "\n";
+  return os.str();
+}
+
+}  // namespace texgrad

@@ -1,0 +1,187 @@
+// buildTexelGrid against texel counts worked out by hand, lattice-aligned vertices, gutters,
+// and structural invariants on procedural and shared meshes.
+#include <gtest/gtest.h>
+
+#include "shared_meshes.h"
+#include "texgrad/atlas/atlas.h"
+#include "texgrad/atlas/atlas_report.h"
+#include "texgrad/atlas/texel_grid.h"
+#include "texgrad/io/mesh_reader.h"
+#include "texgrad/io/procedural.h"
+
+namespace texgrad {
+namespace {
+
+/// Appends an axis-aligned UV rectangle [u0,u1]x[v0,v1] as its own chart (flat, z = chart id).
+void addRectangle(TexturedMesh& m, double u0, double v0, double u1, double v1) {
+  const auto base = static_cast<int32_t>(m.positions.size());
+  const double z = static_cast<double>(m.positions.size());
+  for (const auto& [u, v] : {std::pair{u0, v0}, {u1, v0}, {u1, v1}, {u0, v1}}) {
+    m.positions.emplace_back(u, v, z);
+    m.uvs.emplace_back(u, v);
+  }
+  m.triangles.push_back({base, base + 1, base + 2});
+  m.triangles.push_back({base, base + 2, base + 3});
+  m.uvTriangles.push_back(m.triangles[m.triangles.size() - 2]);
+  m.uvTriangles.push_back(m.triangles.back());
+}
+
+struct Counts {
+  int active = 0, interior = 0, boundary = 0;
+};
+
+Counts countTexels(const TexelGrid& g) {
+  Counts c;
+  for (TexelClass k : g.texelClass) {
+    c.active += k != TexelClass::Inactive;
+    c.interior += k == TexelClass::Interior;
+    c.boundary += k == TexelClass::Boundary;
+  }
+  return c;
+}
+
+TEST(TexelGrid, RectangleBetweenTexelCentresCountsByHand) {
+  // UV [0.25, 0.75]^2 at 16x16: grid coordinates 3.5 .. 11.5. Cells 3..11 are met (3 and 11
+  // half), so texels 3..12 are active (10 per axis) and texels 5..10 have four full cells.
+  TexturedMesh m;
+  addRectangle(m, 0.25, 0.25, 0.75, 0.75);
+  const TexelGrid g = buildTexelGrid(m, buildAtlas(m), 16, 16);
+  const Counts c = countTexels(g);
+  EXPECT_EQ(c.active, 100);
+  EXPECT_EQ(c.interior, 36);
+  EXPECT_EQ(c.boundary, 64);
+  EXPECT_EQ(g.unknownCount(), 100);
+  EXPECT_TRUE(g.multiChartTexels.empty());
+}
+
+TEST(TexelGrid, VerticesExactlyOnTexelCentresNeedNoJitter) {
+  // UV (2.5/16 .. 10.5/16): grid coordinates 2 .. 10 exactly; cells 2..9 are full, texels 2..10
+  // active (9 per axis), texels 3..9 interior (7 per axis).
+  TexturedMesh m;
+  addRectangle(m, 2.5 / 16, 2.5 / 16, 10.5 / 16, 10.5 / 16);
+  const TexelGrid g = buildTexelGrid(m, buildAtlas(m), 16, 16);
+  const Counts c = countTexels(g);
+  EXPECT_EQ(c.active, 81);
+  EXPECT_EQ(c.interior, 49);
+  for (int b = 2; b <= 9; ++b)
+    for (int a = 2; a <= 9; ++a)
+      EXPECT_EQ(g.cellCoverage[g.cellIndex(a - g.x0, b - g.y0)], CellCoverage::Full);
+}
+
+TEST(TexelGrid, UnknownNumberingIsABijectionInRowMajorOrder) {
+  const TexturedMesh m = procedural::cubeSphere(6);
+  const TexelGrid g = buildTexelGrid(m, buildAtlas(m), 64, 64);
+  int previous = -1;
+  for (int u = 0; u < g.unknownCount(); ++u) {
+    const int t = g.texelOfUnknown[u];
+    EXPECT_GT(t, previous);
+    previous = t;
+    EXPECT_EQ(g.unknownOfTexel[t], u);
+    EXPECT_NE(g.texelClass[t], TexelClass::Inactive);
+    EXPECT_GE(g.texelChart[t], 0);
+  }
+}
+
+TEST(TexelGrid, GutterIsMeasuredInTexelsAndTouchingChartsShareTexels) {
+  // Two lattice-aligned squares at 32x32: cells 2..9 and 14..19 -> 4 texels apart.
+  TexturedMesh apart;
+  addRectangle(apart, 2.5 / 32, 2.5 / 32, 10.5 / 32, 10.5 / 32);
+  addRectangle(apart, 14.5 / 32, 2.5 / 32, 20.5 / 32, 10.5 / 32);
+  const Atlas atlasApart = buildAtlas(apart);
+  const TexelGrid g = buildTexelGrid(apart, atlasApart, 32, 32);
+  const AtlasReport report = analyzeAtlas(apart, atlasApart, &g);
+  ASSERT_TRUE(report.texels && report.texels->minGutterTexels);
+  EXPECT_EQ(*report.texels->minGutterTexels, 4.0);
+  EXPECT_EQ(report.texels->multiChartTexels, 0);
+
+  // Charts in neighbouring cells: the texel between them meets both.
+  TexturedMesh touching;
+  addRectangle(touching, 2.5 / 32, 2.5 / 32, 10.5 / 32, 10.5 / 32);
+  addRectangle(touching, 10.5 / 32, 2.5 / 32, 14.5 / 32, 10.5 / 32);
+  const Atlas atlasTouching = buildAtlas(touching);
+  const TexelGrid t = buildTexelGrid(touching, atlasTouching, 32, 32);
+  EXPECT_EQ(t.multiChartTexels.size(), 9u);  // column x = 10, rows 2..10
+  const AtlasReport r2 = analyzeAtlas(touching, atlasTouching, &t);
+  EXPECT_EQ(*r2.texels->minGutterTexels, 0.0);
+}
+
+TEST(TexelGrid, UvsOutsideTheImageExtendTheGrid) {
+  TexturedMesh m;
+  addRectangle(m, -0.1, 0.2, 0.5, 0.6);
+  const TexelGrid g = buildTexelGrid(m, buildAtlas(m), 20, 20);
+  EXPECT_LT(g.x0, 0);
+  const AtlasReport report = analyzeAtlas(m, buildAtlas(m), &g);
+  EXPECT_GT(report.texels->texelsOutsideImage, 0);
+  EXPECT_EQ(report.texels->chartsTouchingBorder, std::vector<int32_t>{0});
+}
+
+TEST(TexelGrid, StackedChartsAreReportedAsOverlap) {
+  TexturedMesh m;
+  addRectangle(m, 0.2, 0.2, 0.6, 0.6);
+  addRectangle(m, 0.4, 0.4, 0.8, 0.8);
+  const Atlas atlas = buildAtlas(m);
+  const TexelGrid g = buildTexelGrid(m, atlas, 32, 32);
+  EXPECT_FALSE(g.overlapCells.empty());
+  EXPECT_FALSE(g.multiChartTexels.empty());
+}
+
+TEST(TexelGrid, InteriorTexelsHaveFourFullCellsOfTheirChart) {
+  const TexturedMesh m = procedural::cube(4);
+  const TexelGrid g = buildTexelGrid(m, buildAtlas(m), 96, 64);
+  int interior = 0;
+  for (int y = 0; y < g.ny; ++y)
+    for (int x = 0; x < g.nx; ++x) {
+      if (g.texelClass[g.texelIndex(x, y)] != TexelClass::Interior) continue;
+      ++interior;
+      for (int b = y - 1; b <= y; ++b)
+        for (int a = x - 1; a <= x; ++a) {
+          ASSERT_EQ(g.cellCoverage[g.cellIndex(a, b)], CellCoverage::Full);
+          ASSERT_EQ(g.cellChart[g.cellIndex(a, b)], g.texelChart[g.texelIndex(x, y)]);
+        }
+    }
+  EXPECT_GT(interior, 0);
+}
+
+TEST(TexelGrid, CoveredAreaMatchesChartUvArea) {
+  const TexturedMesh m = procedural::cubeSphere(8);
+  const Atlas atlas = buildAtlas(m);
+  const int w = 128, h = 128;
+  const TexelGrid g = buildTexelGrid(m, atlas, w, h);
+  double uvArea = 0.0;
+  for (const Chart& c : atlas.charts) uvArea += c.uvArea;
+  int full = 0, partial = 0;
+  for (CellCoverage c : g.cellCoverage) {
+    full += c == CellCoverage::Full;
+    partial += c == CellCoverage::Partial;
+  }
+  // Full cells lie inside the charts; full + partial cells cover them.
+  EXPECT_LE(full, uvArea * w * h + 1e-6);
+  EXPECT_GE(full + partial, uvArea * w * h - 1e-6);
+}
+
+class SharedGrid : public ::testing::TestWithParam<test::SharedMesh> {};
+
+TEST_P(SharedGrid, EveryUvTriangleCornerTexelIsActive) {
+  const test::SharedMesh& s = GetParam();
+  const TexturedMesh m = readMesh(test::sharedData() / s.obj);
+  const Atlas atlas = buildAtlas(m);
+  const TexelGrid g = buildTexelGrid(m, atlas, 256, 256);
+  EXPECT_GT(g.unknownCount(), 0);
+  // The nearest texel of a point inside a positive-area triangle has that point in its footprint.
+  for (size_t f = 0; f < m.faceCount(); ++f) {
+    const Eigen::Vector2d c = (m.uvs[m.uvTriangles[f][0]] + m.uvs[m.uvTriangles[f][1]] +
+                               m.uvs[m.uvTriangles[f][2]]) / 3.0;
+    const Eigen::Vector2d p = g.toGrid(c);
+    const int x = static_cast<int>(std::lround(p.x())), y = static_cast<int>(std::lround(p.y()));
+    const Eigen::Vector2d e1 = m.uvs[m.uvTriangles[f][1]] - m.uvs[m.uvTriangles[f][0]];
+    const Eigen::Vector2d e2 = m.uvs[m.uvTriangles[f][2]] - m.uvs[m.uvTriangles[f][0]];
+    if (e1.x() * e2.y() - e1.y() * e2.x() == 0.0) continue;
+    ASSERT_NE(g.texelClass[g.texelIndex(x, y)], TexelClass::Inactive) << s.name << " face " << f;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllMeshes, SharedGrid, ::testing::ValuesIn(test::sharedMeshes()),
+                         [](const auto& info) { return info.param.name; });
+
+}  // namespace
+}  // namespace texgrad

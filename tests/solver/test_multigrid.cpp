@@ -1,0 +1,188 @@
+// Solver tests: multigrid V-cycle (paper §6.2, Fig. 8) on synthetic Poisson problems, no mesh.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <sstream>
+
+#include "synthetic_problem.h"
+#include "texgrad/core/error.h"
+#include "texgrad/solver/cholmod_solver.h"
+#include "texgrad/solver/multigrid_solver.h"
+
+using namespace texgrad;
+
+namespace {
+
+template <typename T>
+SolveReport runCycles(const test::SyntheticProblem& p, double alpha, int cycles, int k = 3,
+                      MultigridOptions options = {}) {
+  MultigridSolver<T> mg(options);
+  const Eigen::SparseMatrix<double> a = p.system(alpha);
+  mg.init(p.grid, a);
+  mg.update(a);
+  const Eigen::MatrixXd b = a * test::randomBlock(a.rows(), k);
+  typename MultigridSolver<T>::Matrix x = MultigridSolver<T>::Matrix::Zero(a.rows(), k);
+  return mg.solve(b.cast<T>(), x, {cycles, 0.0});
+}
+
+}  // namespace
+
+TEST(Multigrid, ConvergenceFactorIndependentOfGridSize) {
+  // Poisson-like (alpha small): the factor per V-cycle stays within 2x over 64^2 .. 512^2.
+  // Screened (alpha = 1e4, unit-area mass): alpha h^2 shrinks with n, so the problem tends to the
+  // Poisson one from the easy side; its factor is bounded by the Poisson factor at every size.
+  std::vector<double> poisson, screened;
+  for (int n : {64, 128, 256, 512}) {
+    const test::SyntheticProblem p = test::squareProblem(n);
+    for (double alpha : {1e-2, 1e4}) {
+      const SolveReport r = runCycles<double>(p, alpha, 6);
+      (alpha < 1.0 ? poisson : screened).push_back(r.convergenceFactor(4));
+      std::printf("alpha %g n %d factor per cycle %.4f\n", alpha, n, r.convergenceFactor(4));
+      EXPECT_LT(r.convergenceFactor(4), 0.2) << "n = " << n << ", alpha = " << alpha << "\n"
+                                            << r.toString();
+    }
+    EXPECT_LE(screened.back(), 1.2 * poisson.back()) << "n = " << n;
+  }
+  const auto [lo, hi] = std::minmax_element(poisson.begin(), poisson.end());
+  EXPECT_LE(*hi, 2.0 * *lo);
+}
+
+TEST(Multigrid, DoubleConvergesToCholmodSolution) {
+  const test::SyntheticProblem p = test::multiChartProblem(24);
+  for (double alpha : {1e-1, 1e2, 1e4}) {
+    const Eigen::SparseMatrix<double> a = p.system(alpha);
+    const Eigen::MatrixXd b = test::randomBlock(a.rows(), 3, 7);
+    const Eigen::MatrixXd exact = solveDirect(a, b);
+    MultigridSolver<double> mg;
+    mg.init(p.grid, a);
+    mg.update(a);
+    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
+    const SolveReport r = mg.solve(b, x, {40, 1e-12});
+    EXPECT_TRUE(r.converged) << r.toString();
+    EXPECT_LT((x - exact).norm() / exact.norm(), 1e-10) << "alpha " << alpha << "\n" << r.toString();
+    for (size_t i = 2; i < r.residuals.size(); ++i)  // geometric decrease, cycle after cycle
+      EXPECT_LT(r.residuals[i], 0.5 * r.residuals[i - 1]) << "cycle " << i << "\n" << r.toString();
+  }
+}
+
+TEST(Multigrid, FloatReachesSinglePrecisionAccuracy) {
+  const test::SyntheticProblem p = test::multiChartProblem(24);
+  const Eigen::SparseMatrix<double> a = p.system(1e4);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 3, 3);
+  const Eigen::MatrixXd exact = solveDirect(a, b);
+  MultigridSolver<float> mg;
+  mg.init(p.grid, a);
+  mg.update(a);
+  Eigen::MatrixXf x = Eigen::MatrixXf::Zero(a.rows(), 3);
+  const SolveReport r = mg.solve(b.cast<float>(), x, {12, 0.0});
+  EXPECT_LT((x.cast<double>() - exact).norm() / exact.norm(), 1e-5) << r.toString();
+}
+
+TEST(Multigrid, ChangingAlphaOnlyUpdates) {
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  MultigridSolver<float> mg;
+  mg.init(p.grid, p.system(1.0));
+  const int analyses = mg.stats().symbolicAnalyses;
+  EXPECT_GT(analyses, 1);  // boundary blocks and the coarsest level
+  for (double alpha : {1.0, 1e2, 1e4}) {
+    mg.update(p.system(alpha));
+    Eigen::MatrixXf x = Eigen::MatrixXf::Zero(p.mass.rows(), 1);
+    const Eigen::MatrixXd b = test::randomBlock(p.mass.rows(), 1);
+    const SolveReport r = mg.solve(b.cast<float>(), x, {20, 1e-5});
+    EXPECT_TRUE(r.converged) << r.toString();
+  }
+  EXPECT_EQ(mg.stats().symbolicAnalyses, analyses);
+  EXPECT_EQ(mg.stats().inits, 1);
+  EXPECT_EQ(mg.stats().updates, 3);
+  EXPECT_EQ(mg.stats().numericFactorizations, 3 * analyses);
+}
+
+TEST(Multigrid, ResultIndependentOfThreadCount) {
+  const test::SyntheticProblem p = test::multiChartProblem(16);
+  for (bool useFloat : {true, false}) {
+    Eigen::MatrixXd results[2];
+    for (int threads : {1, 2}) {
+      MultigridOptions o;
+      o.threads = threads;
+      const SolveReport r = useFloat ? runCycles<float>(p, 1e3, 3, 3, o) : runCycles<double>(p, 1e3, 3, 3, o);
+      results[threads - 1] = Eigen::Map<const Eigen::VectorXd>(r.residuals.data(), Eigen::Index(r.residuals.size()));
+    }
+    EXPECT_EQ(results[0], results[1]);  // bitwise: residual norms use a fixed reduction tree
+  }
+}
+
+TEST(Multigrid, SolutionBitwiseIndependentOfThreadCount) {
+  const test::SyntheticProblem p = test::multiChartProblem(16);
+  const Eigen::SparseMatrix<double> a = p.system(1e3);
+  const Eigen::MatrixXf b = test::randomBlock(a.rows(), 3).cast<float>();
+  Eigen::MatrixXf x[2];
+  for (int threads : {1, 2}) {
+    MultigridOptions o;
+    o.threads = threads;
+    MultigridSolver<float> mg(o);
+    mg.init(p.grid, a);
+    mg.update(a);
+    x[threads - 1] = Eigen::MatrixXf::Zero(a.rows(), 3);
+    mg.solve(b, x[threads - 1], {3, 0.0});
+  }
+  EXPECT_EQ(x[0], x[1]);
+}
+
+TEST(Multigrid, ManyChannelsMatchOneAtATime) {
+  const test::SyntheticProblem p = test::multiChartProblem(8);
+  const Eigen::SparseMatrix<double> a = p.system(1e2);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 6);
+  MultigridSolver<double> mg;
+  mg.init(p.grid, a);
+  mg.update(a);
+  Eigen::MatrixXd all = Eigen::MatrixXd::Zero(a.rows(), 6);
+  mg.solve(b, all, {2, 0.0});
+  for (int c = 0; c < 6; ++c) {
+    Eigen::MatrixXd one = Eigen::MatrixXd::Zero(a.rows(), 1);
+    mg.solve(b.col(c), one, {2, 0.0});
+    EXPECT_LT((one.col(0) - all.col(c)).norm(), 1e-12 * all.col(c).norm());
+  }
+}
+
+TEST(Multigrid, SummaryListsLevels) {
+  const test::SyntheticProblem p = test::multiChartProblem(16);
+  MultigridSolver<float> mg;
+  mg.init(p.grid, p.system(1.0));
+  std::ostringstream os;
+  os << mg;
+  const std::string s = os.str();
+  std::printf("%s", s.c_str());
+  EXPECT_NE(s.find("level"), std::string::npos);
+  EXPECT_NE(s.find("direct"), std::string::npos);
+  EXPECT_EQ(std::count(s.begin(), s.end(), '\n'), 2 + mg.hierarchy().levelCount()) << s;
+}
+
+TEST(Multigrid, RejectsMisuse) {
+  const test::SyntheticProblem p = test::squareProblem(16);
+  const test::SyntheticProblem q = test::squareProblem(17);
+  MultigridOptions bad;
+  bad.sweeps = 0;
+  EXPECT_THROW(MultigridSolver<float>{bad}, InvalidInputError);
+  MultigridSolver<double> mg;
+  EXPECT_THROW(mg.update(p.system(1.0)), InvalidInputError);
+  mg.init(p.grid, p.system(1.0));
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(p.mass.rows(), 1);
+  EXPECT_THROW(mg.solve(x, x, {1, 0.0}), InvalidInputError);  // before update
+  EXPECT_THROW(mg.update(q.system(1.0)), InvalidInputError);   // other pattern
+  EXPECT_THROW(mg.init(p.grid, q.system(1.0)), InvalidInputError);
+}
+
+TEST(Multigrid, CoarsestOnlyProblemIsSolvedDirectly) {
+  const test::SyntheticProblem p = test::squareProblem(4);
+  MultigridOptions o;
+  o.minCoarseUnknowns = 1000;
+  MultigridSolver<double> mg(o);
+  const Eigen::SparseMatrix<double> a = p.system(1.0);
+  mg.init(p.grid, a);
+  mg.update(a);
+  EXPECT_EQ(mg.hierarchy().levelCount(), 1);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 2);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 2);
+  const SolveReport r = mg.solve(b, x, {1, 0.0});
+  EXPECT_LT(r.residuals.back(), 1e-12);
+}
