@@ -130,7 +130,7 @@ TEST_P(SharedAtlas, MatchesIndexCounts) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllMeshes, SharedAtlas, ::testing::ValuesIn(test::sharedMeshes()),
-                         [](const auto& info) { return info.param.name; });
+                         test::sharedMeshName);
 
 }  // namespace
 }  // namespace texgrad

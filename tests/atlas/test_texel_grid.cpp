@@ -181,7 +181,7 @@ TEST_P(SharedGrid, EveryUvTriangleCornerTexelIsActive) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllMeshes, SharedGrid, ::testing::ValuesIn(test::sharedMeshes()),
-                         [](const auto& info) { return info.param.name; });
+                         test::sharedMeshName);
 
 }  // namespace
 }  // namespace texgrad

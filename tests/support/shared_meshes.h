@@ -1,6 +1,8 @@
 // The meshes of ../shared/data with the counts INDEX.md lists for them (what tests check against).
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <string>
 #include <vector>
 
@@ -38,6 +40,11 @@ inline const std::vector<SharedMesh>& sharedMeshes() {
        0, 84},
   };
   return meshes;
+}
+
+/// Test-name generator for suites parameterised over sharedMeshes().
+inline std::string sharedMeshName(const ::testing::TestParamInfo<SharedMesh>& param) {
+  return param.param.name;
 }
 
 }  // namespace texgrad::test

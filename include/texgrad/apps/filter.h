@@ -1,0 +1,68 @@
+// Gradient-domain filtering (`texgrad filter`, paper §7.1): smooth or sharpen a texture without
+// opening seams, globally (beta) or locally (a per-cell beta map).
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "texgrad/apps/system_solver.h"
+#include "texgrad/apps/texel_domain.h"
+#include "texgrad/io/image.h"
+#include "texgrad/solver/solve_report.h"
+
+namespace texgrad {
+
+/// Parameters of the screened Poisson filter (alpha M + S) x* = (alpha M + beta S) x.
+struct FilterOptions {
+  /// Screening weight (paper default 1e4 on the unit-area surface): larger keeps closer to the
+  /// input; smaller lets the gradient change spread further.
+  double alpha = 1e4;
+  /// Gradient modulation: < 1 smooths, > 1 sharpens, 1 returns the input.
+  double beta = 1.0;
+  /// Optional per-cell beta (TexelGrid::cellIndex), replacing `beta` (paper §7.1 local filtering).
+  std::vector<double> betaPerCell;
+  /// Treat the texture as a tangent-space normal map (decode, filter, renormalise, encode).
+  bool normalMap = false;
+  SolverSettings solver;
+  /// Throws InvalidInputError naming the first bad field.
+  void validate() const;
+};
+
+/// Output of filterTexture: the image plus what the solve did.
+struct FilterResult {
+  Image image;           ///< same size, channels and format as the input; inactive texels kept
+  SolveReport report;    ///< iterations, residuals, phase times
+  double initSeconds = 0.0, updateSeconds = 0.0;
+};
+
+/// Filters `texture` (at the domain's resolution). Multigrid starts from the input texture.
+FilterResult filterTexture(const TexelDomain& domain, const Image& texture,
+                           const FilterOptions& options);
+
+/// The filter as a stateful solver for interactive use: change alpha / beta map, then step.
+class InteractiveFilter {
+ public:
+  /// Sets up the solver (init + update phases) for `texture` on `domain`, which must outlive it.
+  InteractiveFilter(const TexelDomain& domain, const Image& texture, const FilterOptions& options);
+  /// New alpha, uniform beta and optional per-cell beta (replaces beta): numeric update only.
+  void setParameters(double alpha, double beta, std::vector<double> betaPerCell = {});
+  /// One V-cycle (or an exact solve with the direct solver) towards the current target.
+  SolveReport step();
+  /// Runs the configured number of cycles (or the direct solve).
+  SolveReport solve();
+  /// Current solution as an image (input's size, channels and format; inactive texels as input).
+  Image image() const;
+  /// Seconds of the init phase and of the last update.
+  double initSeconds() const { return solver_.initSeconds(); }
+  double updateSeconds() const { return solver_.updateSeconds(); }
+
+ private:
+  const TexelDomain& domain_;
+  Image input_;     ///< texture as given
+  Image working_;   ///< values the solve acts on (decoded vectors for normal maps)
+  bool normalMap_;
+  Eigen::MatrixXd x0_, x_, rhs_;
+  SystemSolver solver_;
+};
+
+}  // namespace texgrad

@@ -1,0 +1,52 @@
+// Seamless stitching of textures from several sources (`texgrad stitch`, paper §7.2): keep the
+// gradients inside each source, drop them across sources, and solve for one consistent texture.
+#pragma once
+
+#include <vector>
+
+#include "texgrad/apps/system_solver.h"
+#include "texgrad/apps/texel_domain.h"
+#include "texgrad/io/image.h"
+#include "texgrad/solver/solve_report.h"
+
+namespace texgrad {
+
+/// Parameters of the stitching solve (alpha W M W + S) x = alpha W M W xbar + d^T *1 g, W = 1 on
+/// texels some source sees.
+struct StitchOptions {
+  /// Screening weight on the unit-area surface (paper default 1e2): how strongly the result keeps
+  /// the sources' absolute colours; gradients inside each source are always kept.
+  double alpha = 1e2;
+  /// Optional lock mask (image of the texture's size): texels where channel 0 > 0.5 keep the
+  /// composite value exactly.
+  Image lock;
+  SolverSettings solver;
+  /// Throws InvalidInputError naming the first bad field.
+  void validate() const;
+};
+
+/// Stitched texture and what the solve did.
+struct StitchResult {
+  Image image;
+  SolveReport report;
+  int sources = 0;           ///< distinct source labels / partial textures used
+  int64_t lockedTexels = 0;  ///< texels held at their input value
+};
+
+/// Composite mode: `composite` holds each texel from one source, `segments` a distinct colour
+/// per source (black = no source). Differences between texels of different sources, or involving
+/// unknown texels, are set to zero.
+StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
+                             const Image& segments, const StitchOptions& options);
+
+/// Partials mode: N partial textures with confidence maps (channel 0 in [0, 1]). Target
+/// differences are the confidence-weighted mean of the partials' differences (weight of a pair =
+/// the smaller confidence of its two texels); zero where no partial sees both texels.
+StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>& partials,
+                            const std::vector<Image>& confidences, const StitchOptions& options);
+
+/// Distinct source label per unknown from a segment image (0 = none, 1.. = sources in order of
+/// first appearance), and the number of sources.
+std::vector<int32_t> sourceLabels(const TexelGrid& grid, const Image& segments, int& sources);
+
+}  // namespace texgrad

@@ -1,0 +1,70 @@
+// One front for every app's linear solves: multigrid (float or double cycles), multigrid-
+// preconditioned CG, or CHOLMOD, with the init / update / solve phases kept apart (DESIGN.md §5).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <memory>
+#include <string>
+
+#include "texgrad/atlas/texel_grid.h"
+#include "texgrad/solver/multigrid_solver.h"
+#include "texgrad/solver/solve_report.h"
+
+namespace texgrad {
+
+/// Which algorithm solves the texel systems.
+enum class SolverKind {
+  Multigrid,    ///< V-cycles (paper §6), starting from the app's initial guess
+  MultigridCg,  ///< conjugate gradients preconditioned by one V-cycle (anisotropic metrics)
+  Direct,       ///< CHOLMOD on the whole system
+};
+
+/// Parses "multigrid", "cg" or "direct"; throws InvalidInputError otherwise.
+SolverKind parseSolverKind(const std::string& text);
+/// Name accepted by parseSolverKind.
+std::string toString(SolverKind kind);
+
+/// Solver choice and stopping rule; every CLI solver flag maps onto one field.
+struct SolverSettings {
+  SolverKind kind = SolverKind::Multigrid;
+  MultigridOptions multigrid;  ///< levels, sweeps, threads
+  bool singlePrecision = true; ///< float V-cycles (factorisations stay double)
+  int cycles = 6;              ///< V-cycles (Multigrid) or max CG iterations / 20 (MultigridCg)
+  double tolerance = 0.0;      ///< stop early below this relative residual (0: run all cycles)
+  /// Throws InvalidInputError naming the first bad field.
+  void validate() const;
+};
+
+/// Solves A X = B repeatedly for one texel grid and one sparsity pattern of A.
+class SystemSolver {
+ public:
+  /// Keeps a reference to `grid`, which must outlive the solver.
+  SystemSolver(const TexelGrid& grid, const SolverSettings& settings);
+  ~SystemSolver();
+  SystemSolver(SystemSolver&&) noexcept;
+  SystemSolver& operator=(SystemSolver&&) noexcept;
+
+  /// Symbolic phase for the sparsity pattern of every later A (values unused).
+  void init(const Eigen::SparseMatrix<double>& pattern);
+  /// Numeric phase for a new A with the same pattern (new alpha, beta or metric).
+  void update(const Eigen::SparseMatrix<double>& a);
+  /// Solves A X = B (n x k), using X as the initial guess for the iterative kinds.
+  SolveReport solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
+  /// One V-cycle (Multigrid and MultigridCg kinds) or an exact solve (Direct), for interactive
+  /// refinement.
+  SolveReport step(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
+  /// Multigrid hierarchy summary, or a one-line description for the direct solver.
+  std::string summary() const;
+  /// Seconds spent in init and in the last update.
+  double initSeconds() const;
+  double updateSeconds() const;
+  /// Settings in use.
+  const SolverSettings& settings() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace texgrad

@@ -1,0 +1,40 @@
+// Everything an app needs about one mesh at one texture resolution: atlas, texel grid, operators.
+#pragma once
+
+#include <memory>
+
+#include "texgrad/atlas/atlas.h"
+#include "texgrad/atlas/texel_grid.h"
+#include "texgrad/core/progress.h"
+#include "texgrad/io/textured_mesh.h"
+#include "texgrad/operators/texel_operators.h"
+
+namespace texgrad {
+
+/// A mesh with its atlas, texel grid and operators (M, S for the unit-area immersion metric),
+/// built once and shared by apps, the CLI and the viewer. Not copyable (operators refer to it).
+class TexelDomain {
+ public:
+  /// Builds atlas, grid (width x height) and operators; throws InvalidInputError if the atlas
+  /// covers no texel at this resolution.
+  TexelDomain(TexturedMesh mesh, int width, int height, const OperatorOptions& options = {},
+              const ProgressCallback& progress = {});
+  TexelDomain(const TexelDomain&) = delete;
+  TexelDomain& operator=(const TexelDomain&) = delete;
+
+  const TexturedMesh& mesh() const { return mesh_; }
+  const Atlas& atlas() const { return atlas_; }
+  const TexelGrid& grid() const { return grid_; }
+  TexelOperators& operators() { return *operators_; }
+  const TexelOperators& operators() const { return *operators_; }
+  /// Number of unknowns (active texels).
+  int unknowns() const { return grid_.unknownCount(); }
+
+ private:
+  TexturedMesh mesh_;
+  Atlas atlas_;
+  TexelGrid grid_;
+  std::unique_ptr<TexelOperators> operators_;
+};
+
+}  // namespace texgrad

@@ -1,0 +1,88 @@
+// Screened Poisson filtering (paper §7.1): (alpha M + S) x* = (alpha M + S_beta) x, where S_beta
+// is beta S, or sum_c beta_c S_c for a painted map.
+#include "texgrad/apps/filter.h"
+
+#include <cmath>
+
+#include "texgrad/apps/normal_map.h"
+#include "texgrad/apps/texel_signal.h"
+#include "texgrad/core/error.h"
+
+namespace texgrad {
+
+void FilterOptions::validate() const {
+  if (!(alpha > 0.0) || !std::isfinite(alpha))
+    throw InvalidInputError("alpha must be a positive number, got " + std::to_string(alpha));
+  if (!std::isfinite(beta)) throw InvalidInputError("beta must be a finite number");
+  for (double b : betaPerCell)
+    if (!std::isfinite(b)) throw InvalidInputError("the beta map holds a non-finite value");
+  solver.validate();
+}
+
+InteractiveFilter::InteractiveFilter(const TexelDomain& domain, const Image& texture,
+                                     const FilterOptions& options)
+    : domain_(domain),
+      input_(texture),
+      working_(options.normalMap ? decodeNormalMap(texture) : texture),
+      normalMap_(options.normalMap),
+      solver_(domain.grid(), options.solver) {
+  options.validate();
+  x0_ = gatherTexels(domain.grid(), working_);
+  x_ = x0_;
+  const TexelOperators& ops = domain.operators();
+  solver_.init(ops.stiffness());
+  setParameters(options.alpha, options.beta, options.betaPerCell);
+}
+
+void InteractiveFilter::setParameters(double alpha, double beta,
+                                      std::vector<double> betaPerCell) {
+  if (!(alpha > 0.0) || !std::isfinite(alpha))
+    throw InvalidInputError("alpha must be a positive number, got " + std::to_string(alpha));
+  const TexelOperators& ops = domain_.operators();
+  if (!betaPerCell.empty() && betaPerCell.size() != domain_.grid().cellCoverage.size())
+    throw InvalidInputError("beta map has " + std::to_string(betaPerCell.size()) +
+                            " cells, the grid has " +
+                            std::to_string(domain_.grid().cellCoverage.size()));
+  const Eigen::SparseMatrix<double> sBeta =
+      betaPerCell.empty() ? Eigen::SparseMatrix<double>(beta * ops.stiffness())
+                          : ops.modulatedStiffness(betaPerCell);
+  const Eigen::SparseMatrix<double> a = alpha * ops.mass() + ops.stiffness();
+  rhs_ = alpha * (ops.mass() * x0_) + sBeta * x0_;
+  solver_.update(a);
+}
+
+SolveReport InteractiveFilter::step() { return solver_.step(rhs_, x_); }
+
+SolveReport InteractiveFilter::solve() { return solver_.solve(rhs_, x_); }
+
+Image InteractiveFilter::image() const {
+  const TexelGrid& grid = domain_.grid();
+  Image solved = working_;
+  scatterTexels(grid, x_, solved);
+  if (normalMap_) {
+    renormalize(solved);
+    solved = encodeNormalMap(solved, input_);
+  }
+  // Only active texels inside the image change; everything else is the input bit for bit.
+  Image out = input_;
+  for (int32_t t : grid.texelOfUnknown) {
+    const int x = t % grid.nx, y = t / grid.nx;
+    if (!grid.inImage(x, y)) continue;
+    for (int c = 0; c < out.channels; ++c)
+      out.at(x + grid.x0, y + grid.y0, c) = solved.at(x + grid.x0, y + grid.y0, c);
+  }
+  return out;
+}
+
+FilterResult filterTexture(const TexelDomain& domain, const Image& texture,
+                           const FilterOptions& options) {
+  InteractiveFilter filter(domain, texture, options);
+  FilterResult result;
+  result.report = filter.solve();
+  result.image = filter.image();
+  result.initSeconds = filter.initSeconds();
+  result.updateSeconds = filter.updateSeconds();
+  return result;
+}
+
+}  // namespace texgrad

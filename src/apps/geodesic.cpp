@@ -1,0 +1,460 @@
+// Heat-method geodesics (paper Sec. 7.3): source snapping, one-point gradient samples of the texel
+// basis for the normalised-gradient divergence, and the two screened-Poisson solves.
+#include "texgrad/apps/geodesic.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "texgrad/core/error.h"
+
+namespace texgrad {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// Faces per parallel task when building gradient samples (fixed: results do not depend on threads).
+constexpr int kFacesPerTask = 64;
+
+/// Barycentric coordinates of the point of triangle (a, b, c) nearest to p, in any dimension
+/// (Ericson, Real-Time Collision Detection, Sec. 5.1.5).
+template <typename Vec>
+Eigen::Vector3d closestBarycentric(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
+  const Vec ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return {1.0, 0.0, 0.0};
+  const Vec bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return {0.0, 1.0, 0.0};
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    const double v = d1 / (d1 - d3);
+    return {1.0 - v, v, 0.0};
+  }
+  const Vec cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return {0.0, 0.0, 1.0};
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    const double w = d2 / (d2 - d6);
+    return {1.0 - w, 0.0, w};
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return {0.0, 1.0 - w, w};
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, w = vc * denom;
+  return {1.0 - v - w, v, w};
+}
+
+fem::SurfacePoint pointAt(const fem::TexelBasis& basis, int face, const Eigen::Vector3d& b) {
+  const auto& c = basis.faceCorners(face);
+  return {face, b[0] * c[0] + b[1] * c[1] + b[2] * c[2]};
+}
+
+ResolvedSource finish(const TexelDomain& domain, const fem::SurfacePoint& point, double snap) {
+  const fem::TexelBasis& basis = domain.operators().basis();
+  return {point, domain.grid().toUv(point.grid), basis.position(point), snap};
+}
+
+ResolvedSource resolveVertex(const TexelDomain& domain, int64_t vertex) {
+  const TexturedMesh& mesh = domain.mesh();
+  if (vertex < 0 || vertex >= static_cast<int64_t>(mesh.positions.size()))
+    throw InvalidInputError("source vertex " + std::to_string(vertex) + " is out of range; the mesh has " +
+                            std::to_string(mesh.positions.size()) + " vertices (0-based indices)");
+  const fem::TexelBasis& basis = domain.operators().basis();
+  for (int f = 0; f < basis.faceCount(); ++f) {
+    if (!basis.faceValid(f)) continue;
+    for (int c = 0; c < 3; ++c)
+      if (mesh.triangles[f][c] == vertex) {
+        Eigen::Vector3d b = Eigen::Vector3d::Zero();
+        b[c] = 1.0;
+        ResolvedSource r = finish(domain, pointAt(basis, f, b), 0.0);
+        r.position = mesh.positions[static_cast<size_t>(vertex)];
+        return r;
+      }
+  }
+  throw InvalidInputError("source vertex " + std::to_string(vertex) +
+                          " belongs to no face with texture coordinates of positive area; pick "
+                          "another vertex or a UV / 3-D source");
+}
+
+ResolvedSource resolveUv(const TexelDomain& domain, const Eigen::Vector2d& uv) {
+  if (!uv.allFinite()) throw InvalidInputError("source UV point is not finite");
+  const fem::TexelBasis& basis = domain.operators().basis();
+  const TexelGrid& grid = domain.grid();
+  const Eigen::Vector2d p = grid.toGrid(uv);
+  const Eigen::Vector2d toUv(1.0 / grid.imageWidth, 1.0 / grid.imageHeight);
+  double best = std::numeric_limits<double>::infinity();
+  fem::SurfacePoint point;
+  for (int f = 0; f < basis.faceCount() && best > 0.0; ++f) {
+    if (!basis.faceValid(f)) continue;
+    const auto& c = basis.faceCorners(f);
+    const Eigen::Vector3d b = closestBarycentric(p, c[0], c[1], c[2]);
+    const fem::SurfacePoint candidate = pointAt(basis, f, b);
+    const double d = (candidate.grid - p).cwiseProduct(toUv).norm();
+    if (d < best) {
+      best = d;
+      point = candidate;
+    }
+  }
+  if (point.face < 0) throw InvalidInputError("the mesh has no face with positive UV area");
+  return finish(domain, point, best);
+}
+
+ResolvedSource resolvePoint(const TexelDomain& domain, const Eigen::Vector3d& target) {
+  if (!target.allFinite()) throw InvalidInputError("source 3-D point is not finite");
+  const TexturedMesh& mesh = domain.mesh();
+  const fem::TexelBasis& basis = domain.operators().basis();
+  double best = std::numeric_limits<double>::infinity();
+  fem::SurfacePoint point;
+  for (int f = 0; f < basis.faceCount() && best > 0.0; ++f) {
+    if (!basis.faceValid(f)) continue;
+    const auto& t = mesh.triangles[f];
+    const Eigen::Vector3d &a = mesh.positions[t[0]], &b = mesh.positions[t[1]],
+                          &c = mesh.positions[t[2]];
+    const Eigen::Vector3d bary = closestBarycentric(target, a, b, c);
+    const double d = (bary[0] * a + bary[1] * b + bary[2] * c - target).norm();
+    if (d < best) {
+      best = d;
+      point = pointAt(basis, f, bary);
+    }
+  }
+  if (point.face < 0) throw InvalidInputError("the mesh has no face with positive UV area");
+  return finish(domain, point, best);
+}
+
+}  // namespace
+
+ResolvedSource resolveSource(const TexelDomain& domain, const GeodesicSource& source) {
+  switch (source.kind) {
+    case GeodesicSource::Kind::Vertex: return resolveVertex(domain, source.vertex);
+    case GeodesicSource::Kind::Uv: return resolveUv(domain, source.uv);
+    case GeodesicSource::Kind::Point: return resolvePoint(domain, source.point);
+  }
+  throw InvalidInputError("unknown geodesic source kind");
+}
+
+void GeodesicOptions::validate() const {
+  if (!(alpha > 0.0) || !std::isfinite(alpha))
+    throw InvalidInputError("geodesic alpha must be a positive finite number, got " +
+                            std::to_string(alpha));
+  solver.validate();
+}
+
+/// One-point quadrature samples of the texel-basis gradients (paper Sec. 7.3): one per plain
+/// piece T ∩ cell (at its centroid) and one per quadratic element of seam pieces (at its
+/// centroid). div_h(omega)_t = sum_q weight_q dphi_t(q) . X_q with X_q = g^-1 omega_q.
+struct GeodesicSolver::Gradients {
+  /// Piece with exactly bilinear basis: four cell texels, centroid in cell-local coordinates.
+  struct CellSample {
+    std::array<int32_t, 4> texels;  ///< order (a,b), (a+1,b), (a,b+1), (a+1,b+1); -1 if absent
+    double fx, fy;                  ///< centroid, cell-local
+    double weight;                  ///< area (texel units) * sqrt|g|
+    double hxx, hxy, hyy;           ///< g^-1
+    int32_t row;                    ///< cell row b (for the two-colour bands)
+  };
+  /// Quadratic element of a seam piece: gradients of its local texels at the centroid.
+  struct SeamSample {
+    int32_t begin, end;  ///< range in seamTexels / seamGradients
+    double weight, hxx, hxy, hyy;
+  };
+
+  std::vector<CellSample> cells;        ///< sorted by cell row
+  std::vector<int64_t> rowBegin;  ///< cells of row b: [rowBegin[b + 1], rowBegin[b + 2]), b >= -1
+  std::vector<SeamSample> seams;
+  std::vector<int32_t> seamTexels;
+  std::vector<Eigen::Vector2d> seamGradients;
+  tbb::task_arena arena;
+
+  Gradients(const TexelDomain& domain, int threads)
+      : arena(threads > 0 ? threads : tbb::task_arena::automatic) {
+    arena.execute([&] { build(domain); });
+  }
+
+  void build(const TexelDomain& domain);
+  /// Adds div_h(-du/|du|) of the function with coefficients u to div (one-point quadrature).
+  void divergence(const double* u, double* div);
+};
+
+void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
+  const fem::TexelBasis& basis = domain.operators().basis();
+  const auto& metric = domain.operators().metric();
+  const int faces = basis.faceCount();
+  const int chunks = (faces + kFacesPerTask - 1) / kFacesPerTask;
+  struct Chunk {
+    std::vector<CellSample> cells;
+    std::vector<SeamSample> seams;
+    std::vector<int32_t> texels;
+    std::vector<Eigen::Vector2d> gradients;
+  };
+  std::vector<Chunk> out(static_cast<size_t>(chunks));
+  tbb::parallel_for(0, chunks, [&](int c) {
+    Chunk& chunk = out[static_cast<size_t>(c)];
+    FaceClip clip;
+    fem::PieceBasis pb;
+    for (int f = c * kFacesPerTask; f < std::min(faces, (c + 1) * kFacesPerTask); ++f) {
+      if (!basis.faceValid(f)) continue;
+      const Eigen::Matrix2d& g = metric[static_cast<size_t>(f)];
+      const double root = std::sqrt(g.determinant());
+      const Eigen::Matrix2d h = g.inverse();
+      basis.clipFace(f, clip);
+      for (const auto& piece : clip.pieces) {
+        const auto poly = clip.polygon(piece);
+        if (basis.isPlain(f, poly)) {
+          const Eigen::Vector2d origin(piece.cellX, piece.cellY);
+          double area = 0.0;
+          Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+          for (size_t i = 0; i < poly.size(); ++i) {
+            const Eigen::Vector2d p = poly[i].p - origin, q = poly[(i + 1) % poly.size()].p - origin;
+            const double cross = p.x() * q.y() - p.y() * q.x();
+            area += cross;
+            centroid += cross * (p + q);
+          }
+          if (!(area > 0.0)) continue;
+          centroid /= 3.0 * area;
+          area *= 0.5;
+          chunk.cells.push_back({basis.cellTexels(piece.cellX, piece.cellY), centroid.x(),
+                                 centroid.y(), area * root, h(0, 0), h(0, 1), h(1, 1),
+                                 piece.cellY});
+          continue;
+        }
+        basis.buildPieceBasis(f, poly, pb);
+        for (size_t e = 0; e < pb.elements.size(); ++e) {
+          const auto& t = pb.elements[e];
+          Eigen::Matrix2d m;
+          m.col(0) = t[1] - t[0];
+          m.col(1) = t[2] - t[0];
+          const double area = 0.5 * m.determinant();
+          if (!(area > 0.0)) continue;
+          const Eigen::Matrix2d inv = m.inverse();
+          const std::array<Eigen::Vector2d, 3> bg{-(inv.row(0) + inv.row(1)).transpose(),
+                                                  inv.row(0).transpose(), inv.row(1).transpose()};
+          // Quadratic shape gradients at the centroid (b = 1/3): corners (4 b_i - 1) grad b_i,
+          // midpoints of (i, j) 4 (b_j grad b_i + b_i grad b_j).
+          Eigen::Matrix<double, 6, 2> dshape;
+          for (int i = 0; i < 3; ++i) dshape.row(i) = bg[i].transpose() / 3.0;
+          dshape.row(3) = (4.0 / 3.0) * (bg[0] + bg[1]).transpose();
+          dshape.row(4) = (4.0 / 3.0) * (bg[1] + bg[2]).transpose();
+          dshape.row(5) = (4.0 / 3.0) * (bg[2] + bg[0]).transpose();
+          const auto coefficients = pb.coefficients.middleRows(static_cast<Eigen::Index>(6 * e), 6);
+          const Eigen::MatrixXd grads = coefficients.transpose() * dshape;  // k x 2
+          SeamSample s{static_cast<int32_t>(chunk.texels.size()), 0, area * root, h(0, 0), h(0, 1),
+                       h(1, 1)};
+          for (size_t k = 0; k < pb.texels.size(); ++k) {
+            if (pb.texels[k] < 0) continue;
+            chunk.texels.push_back(pb.texels[k]);
+            chunk.gradients.emplace_back(grads.row(static_cast<Eigen::Index>(k)).transpose());
+          }
+          s.end = static_cast<int32_t>(chunk.texels.size());
+          chunk.seams.push_back(s);
+        }
+      }
+    }
+  });
+  const TexelGrid& grid = domain.grid();
+  rowBegin.assign(static_cast<size_t>(grid.ny) + 2, 0);
+  for (const Chunk& chunk : out)
+    for (const CellSample& s : chunk.cells) ++rowBegin[static_cast<size_t>(s.row) + 2];
+  for (size_t r = 1; r < rowBegin.size(); ++r) rowBegin[r] += rowBegin[r - 1];
+  std::vector<int64_t> cursor(rowBegin.begin(), rowBegin.end() - 1);
+  cells.resize(static_cast<size_t>(rowBegin.back()));
+  for (Chunk& chunk : out) {
+    for (const CellSample& s : chunk.cells)
+      cells[static_cast<size_t>(cursor[static_cast<size_t>(s.row) + 1]++)] = s;
+    const auto base = static_cast<int32_t>(seamTexels.size());
+    for (SeamSample s : chunk.seams) {
+      s.begin += base;
+      s.end += base;
+      seams.push_back(s);
+    }
+    seamTexels.insert(seamTexels.end(), chunk.texels.begin(), chunk.texels.end());
+    seamGradients.insert(seamGradients.end(), chunk.gradients.begin(), chunk.gradients.end());
+    chunk = Chunk();
+  }
+}
+
+void GeodesicSolver::Gradients::divergence(const double* u, double* div) {
+  // X = -g^-1 du / |du|_{g^-1}: unit (in g) direction of steepest descent of u; zero where du = 0.
+  auto direction = [](double gx, double gy, double hxx, double hxy, double hyy, double weight) {
+    const double zx = hxx * gx + hxy * gy, zy = hxy * gx + hyy * gy;
+    const double norm2 = gx * zx + gy * zy;
+    if (!(norm2 > 0.0) || !std::isfinite(norm2)) return Eigen::Vector2d(0.0, 0.0);
+    const double s = -weight / std::sqrt(norm2);
+    return Eigen::Vector2d(s * zx, s * zy);
+  };
+  arena.execute([&] {
+    const int rows = static_cast<int>(rowBegin.size()) - 1;  // cell rows -1 .. ny - 1
+    // Cell rows b and b + 2 touch disjoint texel rows, so each colour runs its rows in parallel;
+    // every texel gets its contributions in the same order for any thread count.
+    for (int colour = 0; colour < 2; ++colour) {
+      tbb::parallel_for(0, (rows + 1 - colour) / 2, [&](int half) {
+        const size_t slot = static_cast<size_t>(2 * half + colour);
+        for (int64_t i = rowBegin[slot]; i < rowBegin[slot + 1]; ++i) {
+          const CellSample& s = cells[static_cast<size_t>(i)];
+          std::array<double, 4> v{};
+          for (int k = 0; k < 4; ++k) v[k] = s.texels[k] >= 0 ? u[s.texels[k]] : 0.0;
+          const double fx = s.fx, fy = s.fy;
+          const double gx = (1 - fy) * (v[1] - v[0]) + fy * (v[3] - v[2]);
+          const double gy = (1 - fx) * (v[2] - v[0]) + fx * (v[3] - v[1]);
+          const Eigen::Vector2d x = direction(gx, gy, s.hxx, s.hxy, s.hyy, s.weight);
+          const std::array<double, 4> c{-(1 - fy) * x.x() - (1 - fx) * x.y(),
+                                        (1 - fy) * x.x() - fx * x.y(),
+                                        -fy * x.x() + (1 - fx) * x.y(), fy * x.x() + fx * x.y()};
+          for (int k = 0; k < 4; ++k)
+            if (s.texels[k] >= 0) div[s.texels[k]] += c[k];
+        }
+      });
+    }
+  });
+  for (const SeamSample& s : seams) {
+    Eigen::Vector2d grad = Eigen::Vector2d::Zero();
+    for (int32_t k = s.begin; k < s.end; ++k) grad += u[seamTexels[k]] * seamGradients[k];
+    const Eigen::Vector2d x = direction(grad.x(), grad.y(), s.hxx, s.hxy, s.hyy, s.weight);
+    for (int32_t k = s.begin; k < s.end; ++k) div[seamTexels[k]] += seamGradients[k].dot(x);
+  }
+}
+
+GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options)
+    : domain_(&domain),
+      options_([&] {
+        options.validate();
+        return options;
+      }()),
+      diffusionSolver_(domain.grid(), options.solver),
+      distanceSolver_(domain.grid(), options.solver) {
+  const auto start = Clock::now();
+  const TexelOperators& ops = domain.operators();
+  const double area = ops.report().metric.surfaceArea;
+  if (!(area > 0.0)) throw InvalidInputError("the mesh has zero surface area; no distances exist");
+  scale_ = std::sqrt(area);
+  gradients_ = std::make_unique<Gradients>(domain, options_.solver.multigrid.threads);
+  a1_ = options_.alpha * ops.mass() + ops.stiffness();
+  a2_ = ops.stiffness() + kDistanceScreening * ops.mass();
+  diffusionSolver_.init(a1_);
+  diffusionSolver_.update(a1_);
+  distanceSolver_.init(a2_);
+  distanceSolver_.update(a2_);
+  const int n = domain.unknowns();
+  impulse_ = Eigen::MatrixXd::Zero(n, 1);
+  resetIterates();
+  timings_.setup = secondsSince(start);
+}
+
+GeodesicSolver::~GeodesicSolver() = default;
+GeodesicSolver::GeodesicSolver(GeodesicSolver&&) noexcept = default;
+GeodesicSolver& GeodesicSolver::operator=(GeodesicSolver&&) noexcept = default;
+
+void GeodesicSolver::resetIterates() {
+  const int n = domain_->unknowns();
+  u_ = Eigen::MatrixXd::Zero(n, 1);
+  divergence_ = Eigen::MatrixXd::Zero(n, 1);
+  y_ = Eigen::MatrixXd::Zero(n, 1);
+  distances_ = Eigen::VectorXd::Zero(n);
+}
+
+void GeodesicSolver::setAlpha(double alpha) {
+  GeodesicOptions next = options_;
+  next.alpha = alpha;
+  next.validate();
+  options_ = next;
+  const TexelOperators& ops = domain_->operators();
+  a1_ = options_.alpha * ops.mass() + ops.stiffness();
+  diffusionSolver_.update(a1_);
+  resetIterates();
+}
+
+void GeodesicSolver::setSources(std::span<const GeodesicSource> sources) {
+  if (sources.empty()) throw InvalidInputError("geodesic distances need at least one source");
+  std::vector<ResolvedSource> resolved;
+  std::vector<std::vector<fem::TexelWeight>> weights;
+  Eigen::MatrixXd impulse = Eigen::MatrixXd::Zero(domain_->unknowns(), 1);
+  for (const GeodesicSource& source : sources) {
+    resolved.push_back(resolveSource(*domain_, source));
+    weights.push_back(domain_->operators().basis().evaluate(resolved.back().point));
+    if (weights.back().empty())
+      throw InvalidInputError("no texel basis function covers the source at UV (" +
+                              std::to_string(resolved.back().uv.x()) + ", " +
+                              std::to_string(resolved.back().uv.y()) + ")");
+    for (const fem::TexelWeight& w : weights.back()) impulse(w.unknown, 0) += w.weight;
+  }
+  sources_ = std::move(resolved);
+  sourceWeights_ = std::move(weights);
+  impulse_ = std::move(impulse);
+  resetIterates();
+}
+
+void GeodesicSolver::setSource(const GeodesicSource& source) { setSources({&source, 1}); }
+
+void GeodesicSolver::requireSources() const {
+  if (sources_.empty())
+    throw InvalidInputError("GeodesicSolver: call setSources before update or solve");
+}
+
+void GeodesicSolver::diffusionStep(bool full) {
+  const auto start = Clock::now();
+  diffusionReport_ = full ? diffusionSolver_.solve(impulse_, u_) : diffusionSolver_.step(impulse_, u_);
+  timings_.diffusion = secondsSince(start);
+}
+
+void GeodesicSolver::distanceStep(bool full) {
+  auto start = Clock::now();
+  divergence_.setZero();
+  gradients_->divergence(u_.data(), divergence_.data());
+  timings_.divergence = secondsSince(start);
+  start = Clock::now();
+  distanceReport_ = full ? distanceSolver_.solve(divergence_, y_) : distanceSolver_.step(divergence_, y_);
+  double offset = 0.0;
+  for (const auto& weights : sourceWeights_)
+    for (const fem::TexelWeight& w : weights) offset += w.weight * y_(w.unknown, 0);
+  offset /= static_cast<double>(sourceWeights_.size());
+  distances_ = (y_.col(0).array() - offset) * scale_;
+  timings_.distance = secondsSince(start);
+}
+
+void GeodesicSolver::update() {
+  requireSources();
+  diffusionStep(false);
+  distanceStep(false);
+}
+
+void GeodesicSolver::solve() {
+  requireSources();
+  diffusionStep(true);
+  distanceStep(true);
+}
+
+GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,
+                                const GeodesicOptions& options) {
+  GeodesicSolver solver(domain, options);
+  solver.setSources(sources);
+  solver.solve();
+  GeodesicResult result;
+  result.distances = solver.distances();
+  result.sources = solver.sources();
+  result.diffusionReport = solver.diffusionReport();
+  result.distanceReport = solver.distanceReport();
+  result.timings = solver.timings();
+  Eigen::Index best = 0;
+  result.maxDistance = result.distances.maxCoeff(&best);
+  result.farthestUnknown = static_cast<int32_t>(best);
+  const TexelGrid& grid = domain.grid();
+  const int texel = grid.texelOfUnknown[static_cast<size_t>(best)];
+  result.farthestUv = grid.toUv(Eigen::Vector2d(texel % grid.nx, texel / grid.nx));
+  result.farthestPosition = resolveSource(domain, GeodesicSource::atUv(result.farthestUv)).position;
+  return result;
+}
+
+}  // namespace texgrad

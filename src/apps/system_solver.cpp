@@ -1,0 +1,172 @@
+// SystemSolver: dispatches to MultigridSolver<float|double>, multigrid-preconditioned CG or
+// CHOLMOD, moving blocks between double (app side) and the cycle precision.
+#include "texgrad/apps/system_solver.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "texgrad/core/error.h"
+#include "texgrad/solver/cholmod_solver.h"
+#include "texgrad/solver/conjugate_gradient.h"
+
+namespace texgrad {
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+double relativeResidual(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,
+                        const Eigen::MatrixXd& x) {
+  const double norm = b.norm();
+  return norm > 0 ? (b - a * x).norm() / norm : (a * x).norm();
+}
+
+}  // namespace
+
+SolverKind parseSolverKind(const std::string& text) {
+  if (text == "multigrid") return SolverKind::Multigrid;
+  if (text == "cg") return SolverKind::MultigridCg;
+  if (text == "direct") return SolverKind::Direct;
+  throw InvalidInputError("unknown solver '" + text + "'; use multigrid, cg or direct");
+}
+
+std::string toString(SolverKind kind) {
+  switch (kind) {
+    case SolverKind::Multigrid: return "multigrid";
+    case SolverKind::MultigridCg: return "cg";
+    case SolverKind::Direct: return "direct";
+  }
+  return "?";
+}
+
+void SolverSettings::validate() const {
+  multigrid.validate();
+  if (cycles < 1) throw InvalidInputError("cycles must be at least 1, got " + std::to_string(cycles));
+  if (!(tolerance >= 0.0)) throw InvalidInputError("solver tolerance must be >= 0");
+}
+
+struct SystemSolver::Impl {
+  const TexelGrid& grid;
+  SolverSettings settings;
+  std::unique_ptr<MultigridSolver<float>> multigridFloat;
+  std::unique_ptr<MultigridSolver<double>> multigridDouble;
+  CholmodSolver direct;
+  Eigen::SparseMatrix<double> a;
+  double initTime = 0.0, updateTime = 0.0;
+
+  Impl(const TexelGrid& g, const SolverSettings& s) : grid(g), settings(s) {
+    settings.validate();
+    if (settings.kind == SolverKind::Direct) return;
+    if (settings.singlePrecision && settings.kind == SolverKind::Multigrid)
+      multigridFloat = std::make_unique<MultigridSolver<float>>(settings.multigrid);
+    else
+      multigridDouble = std::make_unique<MultigridSolver<double>>(settings.multigrid);
+  }
+
+  template <typename F>
+  auto visitMultigrid(F&& f) const {
+    if (multigridFloat) return f(*multigridFloat);
+    if (!multigridDouble) throw Error("internal: multigrid used with the direct solver");
+    return f(*multigridDouble);
+  }
+
+  template <typename Solver>
+  static SolveReport cycles(Solver& solver, const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
+                            const SolveControl& control) {
+    using Scalar = typename Solver::Matrix::Scalar;
+    const typename Solver::Matrix bs = b.cast<Scalar>();
+    typename Solver::Matrix xs = x.cast<Scalar>();
+    SolveReport report = solver.solve(bs, xs, control);
+    x = xs.template cast<double>();
+    return report;
+  }
+
+  SolveReport directSolve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
+    const auto start = std::chrono::steady_clock::now();
+    SolveReport report;
+    report.residuals.push_back(relativeResidual(a, b, x));
+    const Eigen::MatrixXd previous = x;
+    x = direct.solve(b);
+    report.iterations = 1;
+    report.converged = true;
+    report.residuals.push_back(relativeResidual(a, b, x));
+    report.rmsChange.push_back((x - previous).norm() /
+                               std::sqrt(static_cast<double>(std::max<Eigen::Index>(1, x.size()))));
+    report.times.other = secondsSince(start);
+    return report;
+  }
+
+  SolveReport run(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, int count) {
+    if (x.rows() != b.rows() || x.cols() != b.cols()) x = Eigen::MatrixXd::Zero(b.rows(), b.cols());
+    switch (settings.kind) {
+      case SolverKind::Direct: return directSolve(b, x);
+      case SolverKind::Multigrid: {
+        SolveControl control;
+        control.maxCycles = count;
+        control.tolerance = settings.tolerance;
+        return visitMultigrid([&](auto& solver) { return cycles(solver, b, x, control); });
+      }
+      case SolverKind::MultigridCg: {
+        CgOptions options;
+        options.maxIterations = count;
+        options.tolerance = settings.tolerance > 0 ? settings.tolerance : 1e-8;
+        return conjugateGradient(a, b, x, multigridPreconditioner(*multigridDouble), options);
+      }
+    }
+    return {};
+  }
+};
+
+SystemSolver::SystemSolver(const TexelGrid& grid, const SolverSettings& settings)
+    : impl_(std::make_unique<Impl>(grid, settings)) {}
+SystemSolver::~SystemSolver() = default;
+SystemSolver::SystemSolver(SystemSolver&&) noexcept = default;
+SystemSolver& SystemSolver::operator=(SystemSolver&&) noexcept = default;
+
+void SystemSolver::init(const Eigen::SparseMatrix<double>& pattern) {
+  const auto start = std::chrono::steady_clock::now();
+  if (impl_->settings.kind == SolverKind::Direct)
+    impl_->direct.analyzePattern(pattern);
+  else
+    impl_->visitMultigrid([&](auto& solver) {
+      solver.init(impl_->grid, pattern);
+      return 0;
+    });
+  impl_->initTime = secondsSince(start);
+}
+
+void SystemSolver::update(const Eigen::SparseMatrix<double>& a) {
+  const auto start = std::chrono::steady_clock::now();
+  impl_->a = a;
+  if (impl_->settings.kind == SolverKind::Direct)
+    impl_->direct.factorize(a);
+  else
+    impl_->visitMultigrid([&](auto& solver) {
+      solver.update(a);
+      return 0;
+    });
+  impl_->updateTime = secondsSince(start);
+}
+
+SolveReport SystemSolver::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
+  const int count = impl_->settings.kind == SolverKind::MultigridCg ? 20 * impl_->settings.cycles
+                                                                     : impl_->settings.cycles;
+  return impl_->run(b, x, count);
+}
+
+SolveReport SystemSolver::step(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
+  return impl_->run(b, x, 1);
+}
+
+std::string SystemSolver::summary() const {
+  if (impl_->settings.kind == SolverKind::Direct)
+    return "direct solver (CHOLMOD), " + std::to_string(impl_->grid.unknownCount()) + " unknowns";
+  return impl_->visitMultigrid([](auto& solver) { return solver.summary(); });
+}
+
+double SystemSolver::initSeconds() const { return impl_->initTime; }
+double SystemSolver::updateSeconds() const { return impl_->updateTime; }
+const SolverSettings& SystemSolver::settings() const { return impl_->settings; }
+
+}  // namespace texgrad

@@ -1,0 +1,20 @@
+// TexelDomain: the atlas -> grid -> operators pipeline in one place.
+#include "texgrad/apps/texel_domain.h"
+
+#include "texgrad/core/error.h"
+
+namespace texgrad {
+
+TexelDomain::TexelDomain(TexturedMesh mesh, int width, int height, const OperatorOptions& options,
+                         const ProgressCallback& progress)
+    : mesh_(std::move(mesh)) {
+  reportProgress(progress, "atlas", 0.0);
+  atlas_ = buildAtlas(mesh_);
+  grid_ = buildTexelGrid(mesh_, atlas_, width, height);
+  if (grid_.unknownCount() == 0)
+    throw InvalidInputError("the atlas covers no texel at " + std::to_string(width) + "x" +
+                            std::to_string(height) + "; check the mesh's texture coordinates");
+  operators_ = std::make_unique<TexelOperators>(mesh_, atlas_, grid_, options, progress);
+}
+
+}  // namespace texgrad

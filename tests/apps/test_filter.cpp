@@ -1,0 +1,179 @@
+// Screened-Poisson filtering: identity at beta = 1, multigrid matches direct, metric awareness,
+// smoothing lowers seam jump and energy, beta maps, normal maps stay unit length.
+#include <gtest/gtest.h>
+
+#include "app_fixtures.h"
+#include "shared_meshes.h"
+#include "texgrad/apps/filter.h"
+#include "texgrad/apps/normal_map.h"
+#include "texgrad/atlas/seam_jump.h"
+#include "texgrad/io/image_io.h"
+#include "texgrad/io/mesh_reader.h"
+#include "texgrad/io/procedural.h"
+
+namespace texgrad {
+namespace {
+
+FilterOptions withSolver(SolverKind kind, double beta) {
+  FilterOptions o;
+  o.beta = beta;
+  o.solver.kind = kind;
+  return o;
+}
+
+TEST(Filter, BetaOneReturnsTheInput) {
+  const TexelDomain domain(procedural::cubeSphere(8), 128, 128);
+  const Image input = test::randomTexture(128, 128, 3, 1);
+  for (SolverKind kind : {SolverKind::Direct, SolverKind::Multigrid}) {
+    const FilterResult r = filterTexture(domain, input, withSolver(kind, 1.0));
+    EXPECT_LE(test::activeRms(domain, r.image, input), 1e-5 * test::activeRms(domain, input))
+        << toString(kind);
+  }
+}
+
+TEST(Filter, SmoothingLowersSeamJumpAndEnergySharpeningRaisesEnergy) {
+  const TexelDomain domain(procedural::cubeSphere(8), 128, 128);
+  const Image input = test::randomTexture(128, 128, 1, 2);
+  const Image smooth = filterTexture(domain, input, withSolver(SolverKind::Direct, 0.0)).image;
+  const Image sharp = filterTexture(domain, input, withSolver(SolverKind::Direct, 3.0)).image;
+  const double e0 = test::dirichletEnergy(domain, input);
+  EXPECT_LT(test::dirichletEnergy(domain, smooth), 0.5 * e0);
+  EXPECT_GT(test::dirichletEnergy(domain, sharp), 1.5 * e0);
+  const SeamJump before = measureSeamJump(domain.mesh(), domain.atlas(), input);
+  const SeamJump after = measureSeamJump(domain.mesh(), domain.atlas(), smooth);
+  EXPECT_LT(after.rms, 0.5 * before.rms);
+}
+
+TEST(Filter, SmoothingIsIsotropicOnTheSurfaceForAnisotropicUvs) {
+  // The unit square with UVs squeezed 4x in v: an impulse must blur into a circle on the surface
+  // (an ellipse in UV), so surface second moments agree in x and y.
+  const int w = 256, h = 256;
+  const TexelDomain domain(procedural::square(1.0, 0.25, 0.0, 0.3), w, h);
+  Image impulse(w, h, 1);
+  const int ci = w / 2, cj = static_cast<int>(0.425 * h);
+  impulse.at(ci, cj) = 1.0f;
+  FilterOptions o = withSolver(SolverKind::Direct, 0.0);
+  o.alpha = 100.0;
+  const Image blob = filterTexture(domain, impulse, o).image;
+  double sum = 0, mx = 0, my = 0, sxx = 0, syy = 0;
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      const double value = blob.at(i, j);
+      const double x = (i + 0.5) / w, y = ((j + 0.5) / h - 0.3) / 0.25;
+      sum += value;
+      mx += value * x;
+      my += value * y;
+      sxx += value * x * x;
+      syy += value * y * y;
+    }
+  mx /= sum;
+  my /= sum;
+  const double varX = sxx / sum - mx * mx, varY = syy / sum - my * my;
+  EXPECT_NEAR(varX / varY, 1.0, 0.05) << "var x " << varX << " var y " << varY;
+}
+
+TEST(Filter, ConstantBetaMapMatchesGlobalBetaAndHalfMapsActLocally) {
+  const TexelDomain domain(procedural::cubeSphere(8), 128, 128);
+  const Image input = test::randomTexture(128, 128, 1, 3);
+  FilterOptions global = withSolver(SolverKind::Direct, 0.3);
+  FilterOptions mapped = global;
+  mapped.betaPerCell.assign(domain.grid().cellCoverage.size(), 0.3);
+  const Image a = filterTexture(domain, input, global).image;
+  const Image b = filterTexture(domain, input, mapped).image;
+  EXPECT_LE(test::activeRms(domain, a, b), 1e-12);
+
+  // Left half smooths (beta 0), right half sharpens (beta 3): energy per half moves accordingly.
+  Image map(128, 128, 1);
+  for (int j = 0; j < 128; ++j)
+    for (int i = 64; i < 128; ++i) map.at(i, j) = 1.0f;
+  FilterOptions half = withSolver(SolverKind::Direct, 1.0);
+  half.betaPerCell = cellValuesFromMap(domain.grid(), map, 0.0, 3.0);
+  const Image out = filterTexture(domain, input, half).image;
+  double changeLeft = 0, changeRight = 0, varLeftIn = 0, varLeftOut = 0, varRightIn = 0,
+         varRightOut = 0;
+  const TexelGrid& g = domain.grid();
+  for (int32_t t : g.texelOfUnknown) {
+    if (g.texelClass[t] != TexelClass::Interior) continue;
+    const int i = t % g.nx + g.x0, j = t / g.nx + g.y0;
+    const double in = input.at(i, j) - 0.5, o2 = out.at(i, j) - 0.5;
+    if (i < 60) {
+      varLeftIn += in * in;
+      varLeftOut += o2 * o2;
+      changeLeft += std::abs(in - o2);
+    } else if (i >= 68) {
+      varRightIn += in * in;
+      varRightOut += o2 * o2;
+      changeRight += std::abs(in - o2);
+    }
+  }
+  EXPECT_LT(varLeftOut, 0.5 * varLeftIn);    // smoothed: contrast falls
+  EXPECT_GT(varRightOut, 1.2 * varRightIn);  // sharpened: contrast grows
+  EXPECT_GT(changeLeft, 0.0);
+  EXPECT_GT(changeRight, 0.0);
+}
+
+TEST(Filter, InactiveTexelsAreUntouched) {
+  const TexelDomain domain(procedural::cube(3), 96, 64);
+  const Image input = test::randomTexture(96, 64, 3, 4);
+  const Image out = filterTexture(domain, input, withSolver(SolverKind::Multigrid, 0.0)).image;
+  const TexelGrid& g = domain.grid();
+  for (int j = 0; j < 64; ++j)
+    for (int i = 0; i < 96; ++i) {
+      const int x = i - g.x0, y = j - g.y0;
+      const bool active = x >= 0 && y >= 0 && x < g.nx && y < g.ny &&
+                          g.texelClass[g.texelIndex(x, y)] != TexelClass::Inactive;
+      if (active) continue;
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(out.at(i, j, c), input.at(i, j, c));
+    }
+}
+
+TEST(Filter, NormalMapsStayUnitLength) {
+  const std::filesystem::path dir = test::sharedData() / "Avocado";
+  const TexturedMesh mesh = readMesh(dir / "glTF" / "Avocado.gltf");
+  // Every fourth texel of the 2048² map: a 512² normal map keeps the test quick.
+  const Image full = readImage(dir / "glTF" / "Avocado_normal.png");
+  Image normals(full.width / 4, full.height / 4, full.channels, full.format);
+  for (int j = 0; j < normals.height; ++j)
+    for (int i = 0; i < normals.width; ++i)
+      for (int c = 0; c < full.channels; ++c) normals.at(i, j, c) = full.at(4 * i, 4 * j, c);
+  const TexelDomain domain(mesh, normals.width, normals.height);
+  FilterOptions o = withSolver(SolverKind::Multigrid, 0.0);
+  o.normalMap = true;
+  const Image out = filterTexture(domain, normals, o).image;
+  const Image decoded = decodeNormalMap(out);
+  const TexelGrid& g = domain.grid();
+  double worst = 0.0;
+  for (int32_t t : g.texelOfUnknown) {
+    const int x = t % g.nx, y = t / g.nx;
+    if (!g.inImage(x, y)) continue;
+    Eigen::Vector3d n;
+    for (int c = 0; c < 3; ++c) n[c] = decoded.at(x + g.x0, y + g.y0, c);
+    worst = std::max(worst, std::abs(n.norm() - 1.0));
+  }
+  // 8-bit quantisation of a unit vector moves its length by at most ~sqrt(3)/255.
+  EXPECT_LE(worst, 1e-3 + std::sqrt(3.0) / 255.0);
+}
+
+/// Multigrid (default settings) against the direct solution on every shared mesh at 1024².
+class SharedFilterSlow : public ::testing::TestWithParam<test::SharedMesh> {};
+
+TEST_P(SharedFilterSlow, MultigridWithinATenthOfAnEightBitStepOfDirect) {
+  const test::SharedMesh& s = GetParam();
+  const TexelDomain domain(readMesh(test::sharedData() / s.obj), 1024, 1024);
+  const Image texture = test::randomTexture(1024, 1024, 3, 5);
+  FilterOptions o;
+  o.beta = 0.0;
+  const Image mg = filterTexture(domain, texture, o).image;
+  o.solver.kind = SolverKind::Direct;
+  const Image direct = filterTexture(domain, texture, o).image;
+  const double rms = test::activeRms(domain, mg, direct);
+  std::cout << "[ filter ] " << s.name << " multigrid vs direct RMS " << rms * 255.0
+            << " 8-bit steps\n";
+  EXPECT_LE(rms, 0.1 / 255.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllMeshes, SharedFilterSlow, ::testing::ValuesIn(test::sharedMeshes()),
+                         test::sharedMeshName);
+
+}  // namespace
+}  // namespace texgrad
