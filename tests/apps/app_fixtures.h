@@ -38,4 +38,26 @@ inline double dirichletEnergy(const TexelDomain& domain, const Image& image) {
   return (x.transpose() * (domain.operators().stiffness() * x)).trace();
 }
 
+/// Box-filtered copy of `image` reduced by an integer factor in each direction.
+inline Image downsample(const Image& image, int factor) {
+  if (factor <= 1) return image;
+  Image out(image.width / factor, image.height / factor, image.channels, image.format);
+  for (int j = 0; j < out.height; ++j)
+    for (int i = 0; i < out.width; ++i)
+      for (int c = 0; c < image.channels; ++c) {
+        double sum = 0.0;
+        for (int b = 0; b < factor; ++b)
+          for (int a = 0; a < factor; ++a) sum += image.at(factor * i + a, factor * j + b, c);
+        out.at(i, j, c) = static_cast<float>(sum / (factor * factor));
+      }
+  return out;
+}
+
+/// The texture of a shared mesh reduced to at most `maxSize` texels across (box filter).
+inline Image textureAtMost(const Image& image, int maxSize) {
+  int factor = 1;
+  while (image.width / factor > maxSize) factor *= 2;
+  return downsample(image, factor);
+}
+
 }  // namespace texgrad::test

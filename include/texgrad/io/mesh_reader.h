@@ -38,4 +38,8 @@ size_t weldPositions(TexturedMesh& mesh, double tolerance);
 /// (usually the file) and the first bad element.
 void validateMesh(const TexturedMesh& mesh, const std::string& what);
 
+/// Throws IoError "cannot open FILE: reason; ..." unless `path` is a file that can be opened
+/// for reading (the readers call it first so a missing file is never reported as bad content).
+void requireReadableFile(const std::filesystem::path& path);
+
 }  // namespace texgrad

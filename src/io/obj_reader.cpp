@@ -1,0 +1,171 @@
+// Wavefront OBJ input (through tinyobjloader): polygons fanned into triangles, separate vertex
+// and UV index spaces kept as in the file, the MTL's colour and normal maps as texture refs.
+#include <tiny_obj_loader.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "texgrad/core/error.h"
+#include "texgrad/io/mesh_reader.h"
+
+namespace texgrad {
+namespace {
+
+/// Resolves a texture name from an MTL file (relative to the OBJ's folder, where tinyobjloader
+/// looks for the MTL) to an absolute path; Windows separators are accepted.
+std::filesystem::path resolveTexture(const std::filesystem::path& objPath, std::string name) {
+  std::replace(name.begin(), name.end(), '\\', '/');
+  const std::filesystem::path folder = std::filesystem::absolute(objPath).parent_path();
+  return (folder / name).lexically_normal();
+}
+
+/// Materials in the order faces first use them, then any unused ones (so the texture of the
+/// material actually applied wins when several define one).
+std::vector<size_t> materialOrder(const std::vector<tinyobj::shape_t>& shapes,
+                                  size_t materialCount) {
+  std::vector<size_t> order;
+  std::vector<bool> seen(materialCount, false);
+  const auto add = [&](int id) {
+    if (id < 0 || static_cast<size_t>(id) >= materialCount || seen[static_cast<size_t>(id)]) return;
+    seen[static_cast<size_t>(id)] = true;
+    order.push_back(static_cast<size_t>(id));
+  };
+  for (const auto& shape : shapes)
+    for (int id : shape.mesh.material_ids) add(id);
+  for (size_t id = 0; id < materialCount; ++id) add(static_cast<int>(id));
+  return order;
+}
+
+void addTextures(TexturedMesh& mesh, const std::filesystem::path& path,
+                 const std::vector<tinyobj::shape_t>& shapes,
+                 const std::vector<tinyobj::material_t>& materials) {
+  const auto addSlot = [&](const char* slot, const std::string& name) {
+    if (name.empty() || mesh.texture(slot) != nullptr) return;
+    TextureRef ref;
+    ref.slot = slot;
+    ref.path = resolveTexture(path, name);
+    mesh.textures.push_back(std::move(ref));
+  };
+  for (size_t id : materialOrder(shapes, materials.size())) {
+    const tinyobj::material_t& m = materials[id];
+    addSlot("baseColor", m.diffuse_texname);
+    addSlot("normal", m.normal_texname);
+    addSlot("normal", m.bump_texname);
+  }
+}
+
+/// tinyobjloader reads "nan", "inf" and other non-numbers as 0, so the 'v' and 'vt' lines are
+/// checked here first: every coordinate must be a finite number.
+void checkCoordinates(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  size_t vertex = 0, uv = 0;
+  for (size_t lineNumber = 1; std::getline(in, line); ++lineNumber) {
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    const bool isVertex = keyword == "v";
+    if (!isVertex && keyword != "vt") continue;
+    const std::string what = isVertex ? "vertex " + std::to_string(vertex++)
+                                      : "texture coordinate " + std::to_string(uv++);
+    std::string token;
+    for (int c = 0; c < (isVertex ? 3 : 2) && words >> token; ++c) {
+      double value = 0.0;
+      const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+      const bool number = ec == std::errc() && end == token.data() + token.size();
+      if (!number || !std::isfinite(value))
+        throw InvalidInputError(path.string() + " line " + std::to_string(lineNumber) + ": " +
+                                what + " has coordinate '" + token + "'" +
+                                (number ? ", which is not finite" : ", which is not a number") +
+                                "; fix or remove it in the mesh file");
+    }
+  }
+}
+
+/// Checks one face corner and returns its (vertex, uv) indices.
+std::pair<int32_t, int32_t> corner(const tinyobj::index_t& index, size_t face, size_t k,
+                                   size_t vertexCount, size_t uvCount,
+                                   const std::filesystem::path& path) {
+  const std::string where = path.string() + ": face " + std::to_string(face) + " (0-based, in " +
+                            "file order) corner " + std::to_string(k);
+  if (index.vertex_index < 0 || static_cast<size_t>(index.vertex_index) >= vertexCount)
+    throw InvalidInputError(where + " references vertex " + std::to_string(index.vertex_index) +
+                            " but there are " + std::to_string(vertexCount) +
+                            " vertices (0-based); fix the 'f' line or re-export the mesh");
+  if (index.texcoord_index < 0 && uvCount == 0)
+    throw InvalidInputError(path.string() +
+                            ": the mesh has no texture coordinates ('vt' lines); UV-unwrap it "
+                            "and export it with UVs");
+  if (index.texcoord_index < 0)
+    throw InvalidInputError(where +
+                            " has no texture coordinate; write faces as 'f v/vt' "
+                            "(every face must be UV-mapped)");
+  if (static_cast<size_t>(index.texcoord_index) >= uvCount)
+    throw InvalidInputError(where + " references texture coordinate " +
+                            std::to_string(index.texcoord_index) + " but there are " +
+                            std::to_string(uvCount) +
+                            " (0-based); fix the 'f' line or re-export the mesh");
+  return {index.vertex_index, index.texcoord_index};
+}
+
+}  // namespace
+
+TexturedMesh readObj(const std::filesystem::path& path) {
+  requireReadableFile(path);
+  checkCoordinates(path);
+  tinyobj::ObjReaderConfig config;
+  config.triangulate = false;  // fanned below, after the indices are checked
+  config.vertex_color = false;
+  tinyobj::ObjReader reader;
+  if (!reader.ParseFromFile(path.string(), config))
+    throw InvalidInputError(path.string() + ": not a readable OBJ file (" + reader.Error() +
+                            "); check that it is a Wavefront OBJ");
+
+  const tinyobj::attrib_t& attrib = reader.GetAttrib();
+  TexturedMesh mesh;
+  const size_t vertexCount = attrib.vertices.size() / 3;
+  const size_t uvCount = attrib.texcoords.size() / 2;
+  mesh.positions.reserve(vertexCount);
+  for (size_t v = 0; v < vertexCount; ++v)
+    mesh.positions.emplace_back(static_cast<double>(attrib.vertices[3 * v]),
+                                static_cast<double>(attrib.vertices[3 * v + 1]),
+                                static_cast<double>(attrib.vertices[3 * v + 2]));
+  mesh.uvs.reserve(uvCount);
+  for (size_t t = 0; t < uvCount; ++t)
+    mesh.uvs.emplace_back(static_cast<double>(attrib.texcoords[2 * t]),
+                          static_cast<double>(attrib.texcoords[2 * t + 1]));
+
+  size_t face = 0;
+  std::vector<std::pair<int32_t, int32_t>> corners;
+  for (const tinyobj::shape_t& shape : reader.GetShapes()) {
+    size_t offset = 0;
+    for (unsigned char n : shape.mesh.num_face_vertices) {
+      if (n < 3)
+        throw InvalidInputError(path.string() + ": face " + std::to_string(face) + " has " +
+                                std::to_string(n) + " corners; faces need at least 3");
+      if (offset + n > shape.mesh.indices.size())
+        throw UnsupportedError(path.string() + ": face " + std::to_string(face) +
+                               " has more than 255 corners; triangulate it before reading");
+      corners.clear();
+      for (size_t k = 0; k < n; ++k)
+        corners.push_back(
+            corner(shape.mesh.indices[offset + k], face, k, vertexCount, uvCount, path));
+      for (size_t k = 1; k + 1 < n; ++k) {
+        mesh.triangles.push_back({corners[0].first, corners[k].first, corners[k + 1].first});
+        mesh.uvTriangles.push_back({corners[0].second, corners[k].second, corners[k + 1].second});
+      }
+      offset += n;
+      ++face;
+    }
+  }
+  addTextures(mesh, path, reader.GetShapes(), reader.GetMaterials());
+  validateMesh(mesh, path.string());
+  mesh.sourcePath = path;
+  return mesh;
+}
+
+}  // namespace texgrad
