@@ -202,8 +202,10 @@ TEST(MeshReader, TspPlyMatchesObj) {
     EXPECT_EQ(ply.positions.size(), obj.positions.size());
     EXPECT_EQ(ply.triangles, obj.triangles);
     const auto [position, uv] = cornerDifference(ply, obj);
-    EXPECT_LT(position, 1e-6);
-    EXPECT_LT(uv, 1e-6);
+    // The PLYs store float32, the OBJs decimal text read as double: differences are float
+    // rounding of coordinates up to ~10 model units.
+    EXPECT_LT(position, 1e-5);
+    EXPECT_LT(uv, 1e-6 * 2);
     ASSERT_NE(ply.texture("baseColor"), nullptr);
     EXPECT_TRUE(fs::exists(ply.texture("baseColor")->path)) << ply.texture("baseColor")->path;
     if (const TextureRef* color = obj.texture("baseColor")) {

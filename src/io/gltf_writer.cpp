@@ -1,0 +1,531 @@
+// glTF write-back: copies a .gltf/.glb asset with one material texture replaced by a PNG that is
+// embedded in the asset. tinygltf parses the source without decoding any image (bytes are only
+// captured) and serialises the edited model to a stream inside writeAtomically.
+//
+// Layout of the output:
+//  * .glb  - self-contained: all buffers are merged into buffer 0 (the BIN chunk) and every image
+//            is stored in a bufferView. Source images that cannot be embedded (file missing, or
+//            content that is not PNG/JPEG/WebP/KTX2/DDS) stay referenced by a URI relative to
+//            the target's folder.
+//  * .gltf - single file: every buffer is embedded as a base64 data URI (no sidecar .bin, so the
+//            one atomic rename publishes the whole asset). Embedded source images and the new
+//            texture live in bufferViews of buffer 0; external source images are referenced by
+//            their path relative to the target's folder, so they keep resolving.
+//
+// The replaced texture: the first material (in the reader's order: primitives of the drawn scene,
+// then the material list) with a texture in the slot names texture T. Every material slot of that
+// kind pointing at T is redirected; T itself is reused if nothing else refers to it, otherwise a
+// copy (same sampler) is added. The new image takes the old image's index if no other texture
+// uses that image, otherwise it is appended; the old image's embedded bytes are cut out of the
+// buffer when nothing else shares them, so repeated write-backs do not grow a GLB.
+#include "texgrad/io/gltf_writer.h"
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <string_view>
+#include <vector>
+
+#include "texgrad/core/error.h"
+#include "texgrad/io/atomic_file.h"
+#include "texgrad/io/mesh_reader.h"
+
+namespace texgrad {
+namespace {
+
+namespace fs = std::filesystem;
+
+using Bytes = std::vector<unsigned char>;
+using ImageBytes = std::map<int, Bytes>;
+
+constexpr std::array<std::string_view, 5> kSlots = {"baseColor", "normal", "emissive",
+                                                    "metallicRoughness", "occlusion"};
+/// Largest channel count a PNG holds (grey, grey + alpha, RGB, RGBA).
+constexpr int kMaxChannels = 4;
+/// A GLB's total length is a uint32 (glTF 2.0 spec, "GLB File Format Specification").
+constexpr size_t kMaxGlbBytes = std::numeric_limits<uint32_t>::max();
+
+/// Image loader for tinygltf: keeps the encoded bytes of every image not stored in a bufferView
+/// (external files and data URIs) and decodes nothing.
+bool captureImage(tinygltf::Image* image, const int index, std::string*, std::string*, int, int,
+                  const unsigned char* bytes, int size, void* user) {
+  if (image->bufferView >= 0 || bytes == nullptr || size <= 0) return true;
+  (*static_cast<ImageBytes*>(user))[index].assign(bytes, bytes + size);
+  return true;
+}
+
+bool isBinaryGltf(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::array<char, 4> magic{};
+  in.read(magic.data(), magic.size());
+  return in && std::string_view(magic.data(), magic.size()) == "glTF";
+}
+
+std::string lowercase(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return text;
+}
+
+/// Decodes %XX escapes in a relative URI (glTF image URIs are URI-encoded).
+std::string percentDecode(const std::string& uri) {
+  std::string out;
+  for (size_t i = 0; i < uri.size(); ++i) {
+    if (uri[i] == '%' && i + 2 < uri.size() &&
+        std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+      out.push_back(static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16)));
+      i += 2;
+    } else {
+      out.push_back(uri[i]);
+    }
+  }
+  return out;
+}
+
+/// Escapes a relative path for use as a URI reference (RFC 3986: unreserved characters, '/' and
+/// the sub-delimiters stay; ':' is escaped so a first segment never reads as a scheme).
+std::string percentEncode(const std::string& path) {
+  static constexpr std::string_view kKeep = "-._~/!$&'()*+,;=@";
+  static constexpr char kHex[] = "0123456789ABCDEF";
+  std::string out;
+  for (const char ch : path) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (std::isalnum(c) != 0 || kKeep.find(ch) != std::string_view::npos) {
+      out.push_back(ch);
+    } else {
+      out.push_back('%');
+      out.push_back(kHex[c >> 4]);
+      out.push_back(kHex[c & 0xFu]);
+    }
+  }
+  return out;
+}
+
+bool startsWith(const Bytes& bytes, std::string_view magic) {
+  return bytes.size() >= magic.size() && std::memcmp(bytes.data(), magic.data(), magic.size()) == 0;
+}
+
+/// MIME type of encoded image bytes, or "" if the format is not one glTF (or a common texture
+/// extension) can carry in a bufferView.
+std::string mimeTypeOf(const Bytes& bytes) {
+  using namespace std::string_view_literals;
+  if (startsWith(bytes, "\x89PNG\r\n\x1a\n"sv)) return "image/png";
+  if (startsWith(bytes, "\xff\xd8\xff"sv)) return "image/jpeg";
+  if (startsWith(bytes, "RIFF"sv) && bytes.size() >= 12 &&
+      std::memcmp(bytes.data() + 8, "WEBP", 4) == 0)
+    return "image/webp";
+  if (startsWith(bytes, "\xabKTX 20\xbb\r\n\x1a\n"sv)) return "image/ktx2";
+  if (startsWith(bytes, "DDS "sv)) return "image/vnd-ms.dds";
+  return "";
+}
+
+tinygltf::Model loadModel(const fs::path& path, ImageBytes& images) {
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(captureImage, &images);
+  tinygltf::Model model;
+  std::string error, warning;
+  const bool ok = isBinaryGltf(path)
+                      ? loader.LoadBinaryFromFile(&model, &error, &warning, path.string())
+                      : loader.LoadASCIIFromFile(&model, &error, &warning, path.string());
+  if (!ok) {
+    while (!error.empty() && error.back() == '\n') error.pop_back();
+    if (error.find("File not found") != std::string::npos ||
+        error.find("File read error") != std::string::npos)
+      throw IoError("cannot load " + path.string() + ": " + error +
+                    "; keep its .bin and image files next to it");
+    throw InvalidInputError(path.string() + ": not a valid glTF 2.0 file (" + error +
+                            "); check it with the Khronos glTF validator");
+  }
+  return model;
+}
+
+/// The texture index field of `slot` in a (const or mutable) material.
+template <typename Material>
+auto& slotIndex(Material& m, std::string_view slot) {
+  if (slot == "baseColor") return m.pbrMetallicRoughness.baseColorTexture.index;
+  if (slot == "normal") return m.normalTexture.index;
+  if (slot == "emissive") return m.emissiveTexture.index;
+  if (slot == "metallicRoughness") return m.pbrMetallicRoughness.metallicRoughnessTexture.index;
+  return m.occlusionTexture.index;
+}
+
+/// True if `value` holds, at any depth, a member `key` whose number is `index` (used to find
+/// texture references inside extensions such as KHR_materials_clearcoat, conservatively).
+bool mentionsIndex(const tinygltf::Value& value, const std::string& key, int index) {
+  if (value.IsObject()) {
+    for (const std::string& k : value.Keys()) {
+      const tinygltf::Value& child = value.Get(k);
+      if (k == key && child.IsNumber() && child.GetNumberAsInt() == index) return true;
+      if (mentionsIndex(child, key, index)) return true;
+    }
+  } else if (value.IsArray()) {
+    for (size_t i = 0; i < value.ArrayLen(); ++i)
+      if (mentionsIndex(value.Get(static_cast<int>(i)), key, index)) return true;
+  }
+  return false;
+}
+
+bool mentionsIndex(const tinygltf::ExtensionMap& extensions, const std::string& key, int index) {
+  return std::any_of(extensions.begin(), extensions.end(),
+                     [&](const auto& entry) { return mentionsIndex(entry.second, key, index); });
+}
+
+/// Root nodes to draw: the default scene, else scene 0, else every node without a parent (the
+/// reader's rule).
+std::vector<int> sceneRoots(const tinygltf::Model& model) {
+  if (!model.scenes.empty()) {
+    const int scene =
+        model.defaultScene >= 0 && static_cast<size_t>(model.defaultScene) < model.scenes.size()
+            ? model.defaultScene
+            : 0;
+    return model.scenes[static_cast<size_t>(scene)].nodes;
+  }
+  std::vector<bool> isChild(model.nodes.size(), false);
+  for (const auto& node : model.nodes)
+    for (int c : node.children)
+      if (c >= 0 && static_cast<size_t>(c) < isChild.size()) isChild[static_cast<size_t>(c)] = true;
+  std::vector<int> roots;
+  for (size_t i = 0; i < model.nodes.size(); ++i)
+    if (!isChild[i]) roots.push_back(static_cast<int>(i));
+  return roots;
+}
+
+/// Materials in the order readGltf consults them (primitives of the drawn scene, depth first),
+/// followed by every material index as a fallback.
+std::vector<int> materialOrder(const tinygltf::Model& model) {
+  std::vector<int> order;
+  std::vector<bool> onPath(model.nodes.size(), false);
+  std::function<void(int)> visit = [&](int node) {
+    if (node < 0 || static_cast<size_t>(node) >= model.nodes.size() ||
+        onPath[static_cast<size_t>(node)])
+      return;
+    onPath[static_cast<size_t>(node)] = true;
+    const tinygltf::Node& n = model.nodes[static_cast<size_t>(node)];
+    if (n.mesh >= 0 && static_cast<size_t>(n.mesh) < model.meshes.size())
+      for (const auto& primitive : model.meshes[static_cast<size_t>(n.mesh)].primitives)
+        if (primitive.material >= 0) order.push_back(primitive.material);
+    for (int child : n.children) visit(child);
+    onPath[static_cast<size_t>(node)] = false;
+  };
+  for (int root : sceneRoots(model)) visit(root);
+  for (size_t m = 0; m < model.materials.size(); ++m) order.push_back(static_cast<int>(m));
+  return order;
+}
+
+/// Texture index of `slot` in the first material that has one, or -1.
+int findSlotTexture(const tinygltf::Model& model, std::string_view slot) {
+  for (int m : materialOrder(model)) {
+    if (static_cast<size_t>(m) >= model.materials.size()) continue;
+    const int texture = slotIndex(model.materials[static_cast<size_t>(m)], slot);
+    if (texture >= 0 && static_cast<size_t>(texture) < model.textures.size()) return texture;
+  }
+  return -1;
+}
+
+/// True if texture `texture` is used by anything other than the `slot` fields being redirected.
+bool textureUsedElsewhere(const tinygltf::Model& model, int texture, std::string_view slot) {
+  for (const auto& m : model.materials) {
+    for (std::string_view other : kSlots)
+      if (other != slot && slotIndex(m, other) == texture) return true;
+    if (mentionsIndex(m.extensions, "index", texture) ||
+        mentionsIndex(m.pbrMetallicRoughness.extensions, "index", texture))
+      return true;
+  }
+  return mentionsIndex(model.extensions, "index", texture);
+}
+
+/// True if any texture uses image `image` (as its source or as an extension's source).
+bool imageUsed(const tinygltf::Model& model, int image) {
+  return std::any_of(model.textures.begin(), model.textures.end(), [&](const auto& t) {
+    return t.source == image || mentionsIndex(t.extensions, "source", image);
+  });
+}
+
+/// Appends `bytes` to buffer 0 (4-byte aligned) as bufferView `reuse`, or as a new bufferView if
+/// `reuse` is -1; returns its index.
+int appendBufferView(tinygltf::Model& model, const Bytes& bytes, int reuse = -1) {
+  Bytes& data = model.buffers[0].data;
+  data.resize((data.size() + 3) / 4 * 4, 0);
+  tinygltf::BufferView view;
+  view.buffer = 0;
+  view.byteOffset = data.size();
+  view.byteLength = bytes.size();
+  data.insert(data.end(), bytes.begin(), bytes.end());
+  if (reuse >= 0) {
+    model.bufferViews[static_cast<size_t>(reuse)] = std::move(view);
+    return reuse;
+  }
+  model.bufferViews.push_back(std::move(view));
+  return static_cast<int>(model.bufferViews.size() - 1);
+}
+
+/// True if anything but image `image` uses bufferView `view` (accessors, other images, or a
+/// "bufferView" member in an extension such as KHR_draco_mesh_compression).
+bool bufferViewUsedElsewhere(const tinygltf::Model& model, int view, int image) {
+  for (const auto& a : model.accessors)
+    if (a.bufferView == view || a.sparse.indices.bufferView == view ||
+        a.sparse.values.bufferView == view)
+      return true;
+  for (size_t i = 0; i < model.images.size(); ++i)
+    if (static_cast<int>(i) != image && model.images[i].bufferView == view) return true;
+  for (const auto& mesh : model.meshes) {
+    if (mentionsIndex(mesh.extensions, "bufferView", view)) return true;
+    for (const auto& primitive : mesh.primitives)
+      if (mentionsIndex(primitive.extensions, "bufferView", view)) return true;
+  }
+  return mentionsIndex(model.extensions, "bufferView", view);
+}
+
+/// If image `image` is stored in a bufferView nothing else uses, cuts its bytes out of the buffer
+/// (later bufferViews move down by a multiple of 4, keeping their alignment) and returns the
+/// bufferView's index for reuse; returns -1 and changes nothing if that is not safe.
+int releaseImageBytes(tinygltf::Model& model, int image) {
+  const int index = model.images[static_cast<size_t>(image)].bufferView;
+  if (index < 0 || static_cast<size_t>(index) >= model.bufferViews.size() ||
+      bufferViewUsedElsewhere(model, index, image))
+    return -1;
+  // Compressed views (EXT_meshopt_compression) address buffers by offset: never move bytes then.
+  for (const auto& v : model.bufferViews)
+    if (!v.extensions.empty()) return -1;
+  const tinygltf::BufferView& view = model.bufferViews[static_cast<size_t>(index)];
+  if (view.buffer < 0 || static_cast<size_t>(view.buffer) >= model.buffers.size()) return -1;
+  Bytes& data = model.buffers[static_cast<size_t>(view.buffer)].data;
+  const size_t start = view.byteOffset, end = view.byteOffset + view.byteLength;
+  if (start > data.size() || end > data.size()) return -1;
+  for (size_t v = 0; v < model.bufferViews.size(); ++v) {
+    const tinygltf::BufferView& other = model.bufferViews[v];
+    if (static_cast<int>(v) != index && other.buffer == view.buffer && other.byteOffset < end &&
+        other.byteOffset + other.byteLength > start)
+      return -1;  // overlapping views share bytes
+  }
+  const size_t cut = (end - start) / 4 * 4;
+  data.erase(data.begin() + static_cast<std::ptrdiff_t>(start),
+             data.begin() + static_cast<std::ptrdiff_t>(start + cut));
+  for (auto& other : model.bufferViews)
+    if (other.buffer == view.buffer && other.byteOffset >= end) other.byteOffset -= cut;
+  return index;
+}
+
+/// Moves the data of every buffer into buffer 0 (which becomes the GLB's BIN chunk).
+void mergeBuffers(tinygltf::Model& model) {
+  Bytes& merged = model.buffers[0].data;
+  for (size_t b = 1; b < model.buffers.size(); ++b) {
+    merged.resize((merged.size() + 3) / 4 * 4, 0);
+    const size_t offset = merged.size();
+    const Bytes& data = model.buffers[b].data;
+    merged.insert(merged.end(), data.begin(), data.end());
+    for (auto& view : model.bufferViews)
+      if (view.buffer == static_cast<int>(b)) {
+        view.buffer = 0;
+        view.byteOffset += offset;
+      }
+  }
+  model.buffers.resize(1);
+  model.buffers[0].uri.clear();
+}
+
+/// Channel names and alpha for a 1-4 channel PNG; colour is stored unpremultiplied.
+OIIO::ImageSpec pngSpec(const Image& image, bool sixteenBit) {
+  OIIO::ImageSpec spec(image.width, image.height, image.channels,
+                       sixteenBit ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8);
+  static const std::array<std::vector<std::string>, kMaxChannels> names{
+      {{"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}}};
+  spec.channelnames = names[static_cast<size_t>(image.channels - 1)];
+  spec.alpha_channel = (image.channels == 2 || image.channels == 4) ? image.channels - 1 : -1;
+  spec.attribute("oiio:UnassociatedAlpha", 1);
+  return spec;
+}
+
+/// Texel-order floats to file-order (top row first) integer samples, clamped and rounded.
+template <typename T>
+std::vector<T> fileOrderSamples(const Image& image) {
+  constexpr float levels = static_cast<float>(std::numeric_limits<T>::max());
+  const size_t row = static_cast<size_t>(image.width) * static_cast<size_t>(image.channels);
+  std::vector<T> out(image.pixels.size());
+  for (size_t j = 0; j < static_cast<size_t>(image.height); ++j) {
+    const size_t from = j * row, to = (static_cast<size_t>(image.height) - 1 - j) * row;
+    for (size_t k = 0; k < row; ++k) {
+      const float v = image.pixels[from + k];
+      const float clamped = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
+      out[to + k] = static_cast<T>(std::lround(clamped * levels));
+    }
+  }
+  return out;
+}
+
+std::string oneLine(std::string message) {
+  for (char& c : message)
+    if (c == '\n' || c == '\r') c = ' ';
+  while (!message.empty() && message.back() == ' ') message.pop_back();
+  return message.empty() ? std::string("unknown OpenImageIO error") : message;
+}
+
+/// Encodes `image` as PNG bytes in memory: 8-bit for UInt8, 16-bit for the other formats.
+Bytes encodePng(const Image& image, PixelFormat format, const std::string& where) {
+  const bool sixteenBit = format != PixelFormat::UInt8;
+  Bytes bytes;
+  OIIO::Filesystem::IOVecOutput proxy(bytes);
+  const std::string proxyName = "texgrad-memory.png";
+  auto output = OIIO::ImageOutput::create(proxyName);
+  if (!output) throw IoError(where + oneLine(OIIO::geterror()));
+  OIIO::ImageSpec spec = pngSpec(image, sixteenBit);
+  OIIO::Filesystem::IOProxy* proxyPointer = &proxy;
+  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxyPointer);
+  if (!output->set_ioproxy(&proxy) || !output->open(proxyName, spec))
+    throw IoError(where + oneLine(output->geterror()));
+  const bool ok =
+      sixteenBit
+          ? output->write_image(OIIO::TypeDesc::UINT16, fileOrderSamples<uint16_t>(image).data())
+          : output->write_image(OIIO::TypeDesc::UINT8, fileOrderSamples<uint8_t>(image).data());
+  if (!ok) {
+    const std::string message = oneLine(output->geterror());
+    output->close();
+    throw IoError(where + message);
+  }
+  if (!output->close()) throw IoError(where + oneLine(output->geterror()));
+  return bytes;
+}
+
+void checkImage(const Image& image, const std::string& where) {
+  if (image.width <= 0 || image.height <= 0 || image.channels <= 0)
+    throw InvalidInputError(where + "the image is empty");
+  if (image.channels > kMaxChannels)
+    throw UnsupportedError(where + std::to_string(image.channels) +
+                           " channels; a PNG texture holds 1 to 4");
+  if (image.pixels.size() != image.index(0, image.height))
+    throw InvalidInputError(where + "pixel buffer size does not match " +
+                            std::to_string(image.width) + " x " + std::to_string(image.height) +
+                            " x " + std::to_string(image.channels));
+}
+
+/// URI of `file` relative to `folder` (absolute path if no relative one exists).
+std::string relativeUri(const fs::path& file, const fs::path& folder) {
+  std::error_code ec;
+  fs::path relative = fs::relative(file, folder, ec);
+  if (ec || relative.empty()) relative = file;
+  return percentEncode(relative.generic_string());
+}
+
+/// Serialises the model to `path`; tinygltf's image writer is disabled so image URIs stay as set.
+void writeModel(const tinygltf::Model& model, const fs::path& path, const fs::path& target,
+                bool binary) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) throw IoError("cannot write " + target.string() + ": cannot create a file there");
+  tinygltf::TinyGLTF writer;
+  writer.SetImageWriter(nullptr, nullptr);
+  const bool ok = writer.WriteGltfSceneToStream(&model, out, true, binary);
+  out.close();
+  if (!ok || !out)
+    throw IoError("cannot write " + target.string() + ": writing failed (disk full?)");
+}
+
+}  // namespace
+
+void writeGltfWithTexture(const fs::path& source, const fs::path& target, const std::string& slot,
+                          const Image& image, std::optional<PixelFormat> format) {
+  if (std::find(kSlots.begin(), kSlots.end(), slot) == kSlots.end())
+    throw InvalidInputError("unknown texture slot '" + slot +
+                            "'; use baseColor, normal, emissive, metallicRoughness or occlusion");
+  const std::string extension = lowercase(target.extension().string());
+  if (extension != ".gltf" && extension != ".glb")
+    throw UnsupportedError("cannot write " + target.string() + ": unknown glTF extension '" +
+                           target.extension().string() + "'; use .gltf or .glb");
+  const bool binary = extension == ".glb";
+  const std::string where = "cannot write " + target.string() + ": ";
+  checkImage(image, where);
+
+  requireReadableFile(source);
+  ImageBytes sourceImages;
+  tinygltf::Model model = loadModel(source, sourceImages);
+
+  const int texture = findSlotTexture(model, slot);
+  if (texture < 0)
+    throw InvalidInputError(source.string() + " has no " + slot +
+                            " texture to replace; its materials reference none");
+
+  const Bytes png = encodePng(image, format.value_or(image.format), where);
+
+  if (model.buffers.empty()) model.buffers.emplace_back();
+  if (binary) mergeBuffers(model);
+
+  // Redirect the slot: reuse texture T when only these slots use it, else add a copy.
+  const int oldImage = model.textures[static_cast<size_t>(texture)].source;
+  int newTexture = texture;
+  if (textureUsedElsewhere(model, texture, slot)) {
+    tinygltf::Texture copy = model.textures[static_cast<size_t>(texture)];
+    model.textures.push_back(std::move(copy));
+    newTexture = static_cast<int>(model.textures.size() - 1);
+    for (auto& m : model.materials)
+      if (slotIndex(m, slot) == texture) slotIndex(m, slot) = newTexture;
+  }
+  tinygltf::Texture& redirected = model.textures[static_cast<size_t>(newTexture)];
+  redirected.extensions.clear();  // alternative sources (KHR_texture_basisu, ...) would win
+  redirected.source = -1;
+
+  tinygltf::Image replacement;
+  replacement.name = slot;
+  replacement.mimeType = "image/png";
+  int newImage = -1;
+  if (oldImage >= 0 && static_cast<size_t>(oldImage) < model.images.size() &&
+      !imageUsed(model, oldImage)) {
+    // The old picture is referenced by nothing else: drop it (and its bytes, if embedded).
+    newImage = oldImage;
+    const int freedView = releaseImageBytes(model, oldImage);
+    replacement.bufferView = appendBufferView(model, png, freedView);
+    if (!model.images[static_cast<size_t>(oldImage)].name.empty())
+      replacement.name = model.images[static_cast<size_t>(oldImage)].name;
+    model.images[static_cast<size_t>(oldImage)] = std::move(replacement);
+  } else {
+    replacement.bufferView = appendBufferView(model, png);
+    model.images.push_back(std::move(replacement));
+    newImage = static_cast<int>(model.images.size() - 1);
+  }
+  redirected.source = newImage;
+
+  // The other images: embed (GLB, data URIs) or re-point external files relative to the target.
+  const fs::path sourceFolder = fs::absolute(source).parent_path();
+  const fs::path targetFolder = fs::absolute(target).parent_path();
+  for (size_t i = 0; i < model.images.size(); ++i) {
+    tinygltf::Image& img = model.images[i];
+    if (img.bufferView >= 0) continue;
+    const auto captured = sourceImages.find(static_cast<int>(i));
+    const bool external = !img.uri.empty();
+    if (captured != sourceImages.end() && (binary || !external)) {
+      const std::string mime = img.mimeType.empty() ? mimeTypeOf(captured->second) : img.mimeType;
+      if (!mime.empty()) {
+        img.mimeType = mime;
+        img.bufferView = appendBufferView(model, captured->second);
+        img.uri.clear();
+        continue;
+      }
+    }
+    if (external) {
+      const fs::path file = (sourceFolder / percentDecode(img.uri)).lexically_normal();
+      img.uri = relativeUri(file, targetFolder);
+    } else {
+      throw InvalidInputError(source.string() + ": image " + std::to_string(i) +
+                              " has neither a URI nor data; re-export the asset");
+    }
+  }
+
+  if (binary && model.buffers[0].data.size() > kMaxGlbBytes)
+    throw UnsupportedError(where + "the binary data exceeds the 4 GB a GLB can hold; write .gltf");
+  if (model.asset.version.empty()) model.asset.version = "2.0";
+
+  writeAtomically(target,
+                  [&](const fs::path& temporary) { writeModel(model, temporary, target, binary); });
+}
+
+}  // namespace texgrad
