@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <new>
@@ -10,6 +11,7 @@
 #include <optional>
 
 #include "texgrad/core/error.h"
+#include "texgrad/io/gltf_writer.h"
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/procedural.h"
@@ -127,5 +129,111 @@ int runGuarded(const std::function<void()>& body) {
 }
 
 void printJson(const nlohmann::json& document) { std::cout << document.dump(2) << "\n"; }
+
+SolverSettings SolverArgs::settings() const {
+  SolverSettings s;
+  s.kind = parseSolverKind(kind);
+  if (precision != "float" && precision != "double")
+    throw InvalidInputError("--precision must be float or double, got '" + precision + "'");
+  s.singlePrecision = precision == "float";
+  s.cycles = cycles;
+  s.multigrid.levels = levels;
+  s.multigrid.sweeps = sweeps;
+  s.multigrid.threads = threads;
+  s.validate();
+  return s;
+}
+
+void addSolverOptions(CLI::App* cmd, SolverArgs& args, int defaultCycles) {
+  args.cycles = defaultCycles;
+  cmd->add_option("--solver", args.kind,
+                  "multigrid (V-cycles, paper Sec. 6), cg (conjugate gradients preconditioned by "
+                  "a V-cycle) or direct (CHOLMOD: exact, slower, more memory)")
+      ->default_val("multigrid")
+      ->check(CLI::IsMember({"multigrid", "cg", "direct"}));
+  cmd->add_option("--cycles", args.cycles,
+                  "V-cycles for multigrid (more = closer to the exact solution)")
+      ->default_val(defaultCycles)
+      ->check(CLI::Range(1, 10000));
+  cmd->add_option("--levels", args.levels, "Multigrid coarsening levels (paper default 4)")
+      ->default_val(4)
+      ->check(CLI::Range(0, 16));
+  cmd->add_option("--sweeps", args.sweeps, "Gauss-Seidel sweeps per level (paper default 3)")
+      ->default_val(3)
+      ->check(CLI::Range(1, 100));
+  cmd->add_option("--precision", args.precision,
+                  "float or double V-cycles (factorisations are always double)")
+      ->default_val("float")
+      ->check(CLI::IsMember({"float", "double"}));
+  cmd->add_option("--threads", args.threads, "Worker threads; 0 = all cores")
+      ->default_val(0)
+      ->check(CLI::Range(0, 1024));
+}
+
+void addReportOptions(CLI::App* cmd, ReportArgs& args) {
+  cmd->add_flag("--json", args.json,
+                "Print a JSON summary (texels, phases, cycles, residuals) on stdout");
+  cmd->add_flag("--timings", args.timings, "Print the time of each stage on stderr");
+  cmd->add_flag("--quiet,-q", args.quiet, "No progress bar");
+}
+
+namespace {
+double now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+}  // namespace
+
+StageTimer::StageTimer() : start_(now()), last_(start_) {}
+
+void StageTimer::lap(const std::string& name) {
+  const double t = now();
+  stages_.emplace_back(name, t - last_);
+  last_ = t;
+}
+
+nlohmann::json StageTimer::json() const {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [name, seconds] : stages_) j[name] = seconds;
+  j["total"] = last_ - start_;
+  return j;
+}
+
+void StageTimer::print() const {
+  for (const auto& [name, seconds] : stages_)
+    std::fprintf(stderr, "  %-12s %8.3f s\n", name.c_str(), seconds);
+  std::fprintf(stderr, "  %-12s %8.3f s\n", "total", last_ - start_);
+}
+
+nlohmann::json toJson(const SolveReport& report) {
+  return {{"iterations", report.iterations},
+          {"converged", report.converged},
+          {"residuals", report.residuals},
+          {"rms_change", report.rmsChange},
+          {"seconds",
+           {{"relaxation", report.times.relaxation},
+            {"boundary", report.times.boundary},
+            {"coarse", report.times.coarse},
+            {"transfer", report.times.transfer},
+            {"total", report.times.total()}}}};
+}
+
+void writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const Image& image,
+                        const std::string& slot, const std::string& bitDepth) {
+  std::optional<PixelFormat> format;
+  if (!bitDepth.empty()) format = parsePixelFormat(bitDepth);
+  std::string ext = std::filesystem::path(out).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".gltf" && ext != ".glb") {
+    writeImage(out, image, format);
+    return;
+  }
+  std::string source = mesh.sourcePath.extension().string();
+  for (char& c : source) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (source != ".gltf" && source != ".glb")
+    throw InvalidInputError("--out " + out + " asks for a glTF asset, but the mesh was not read "
+                            "from glTF; write an image (.png, .exr, ...) instead");
+  writeGltfWithTexture(mesh.sourcePath, out, slot, image, format);
+}
 
 }  // namespace texgrad::cli

@@ -8,7 +8,9 @@
 #include <string>
 #include <utility>
 
+#include "texgrad/apps/system_solver.h"
 #include "texgrad/core/progress.h"
+#include "texgrad/solver/solve_report.h"
 #include "texgrad/io/image.h"
 #include "texgrad/io/textured_mesh.h"
 
@@ -39,5 +41,52 @@ int runGuarded(const std::function<void()>& body);
 
 /// Prints a JSON document to stdout (pretty, newline-terminated).
 void printJson(const nlohmann::json& document);
+
+/// Solver flags shared by every command that solves (--solver, --cycles, --levels, ...).
+struct SolverArgs {
+  std::string kind = "multigrid";
+  std::string precision = "float";
+  int cycles = 6;
+  int levels = 4;
+  int sweeps = 3;
+  int threads = 0;
+  /// The settings these flags describe; throws InvalidInputError on a bad value.
+  SolverSettings settings() const;
+};
+/// Registers the solver flags on `cmd`; `defaultCycles` is the command's V-cycle default.
+void addSolverOptions(CLI::App* cmd, SolverArgs& args, int defaultCycles);
+
+/// Output flags shared by processing commands.
+struct ReportArgs {
+  bool json = false;     ///< print a JSON summary on stdout
+  bool timings = false;  ///< print phase timings on stderr
+  bool quiet = false;    ///< no progress bar
+};
+/// Registers --json, --timings and --quiet on `cmd`.
+void addReportOptions(CLI::App* cmd, ReportArgs& args);
+
+/// Wall-clock timer of named stages, printed with --timings and included in --json.
+class StageTimer {
+ public:
+  StageTimer();
+  /// Ends the current stage under `name` and starts the next one.
+  void lap(const std::string& name);
+  /// Stages as {"name": seconds, ...} plus "total".
+  nlohmann::json json() const;
+  /// One line per stage on stderr.
+  void print() const;
+
+ private:
+  std::vector<std::pair<std::string, double>> stages_;
+  double start_, last_;
+};
+
+/// JSON of a solve report: iterations, converged, residuals, RMS changes, phase times.
+nlohmann::json toJson(const SolveReport& report);
+
+/// Writes a processed texture: an image file, or — when `out` ends in .gltf/.glb — a copy of the
+/// mesh's glTF asset whose `slot` texture is the processed image. `bitDepth` as parsePixelFormat.
+void writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const Image& image,
+                        const std::string& slot, const std::string& bitDepth);
 
 }  // namespace texgrad::cli

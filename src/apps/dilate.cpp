@@ -90,6 +90,9 @@ Eigen::Vector2d acrossSeam(const Eigen::Vector2d& p, const BoundaryEdge& self, d
   Eigen::Vector2d alongP = (partner.end - partner.start).normalized();
   if (!sameDirection) alongP = -alongP;
   const Eigen::Vector2d qp = partner.start + sp * (partner.end - partner.start);
+  // A texel diagonal to a chart corner (nearest point = an edge end) would be carried past the
+  // partner chart's corner; the corner itself is on the partner chart, so look up there.
+  if (s <= 0.0 || s >= 1.0) return qp;
   return qp + scale * (a * alongP + outward * inwardNormal(partner));
 }
 

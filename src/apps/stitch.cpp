@@ -1,7 +1,12 @@
-// Stitching (paper §7.2): per-pair target differences g on the texel pairs A, divergence d^T *1 g
-// (paper §5.3), screened by the sources' values where any source sees a texel.
+// Stitching (paper §7.2). The target gradient field is the sources' gradient, blended per lattice
+// cell, so its divergence is sum_i sum_c beta_ic S_c x_i with the per-cell stiffness pieces S_c
+// of paper §7.1 (exact for that field). The issue asks for per-pair targets d^T *1 g; the Whitney
+// star *1 is |A| x |A| with ~11 |A| non-zeros and slow to assemble, and the lumped star
+// diag(-S_st) is indefinite here (S has positive off-diagonals on distorted charts), so we keep
+// a cell's gradient only where every texel whose basis function lives on it has the same source.
 #include "texgrad/apps/stitch.h"
 
+#include <array>
 #include <cmath>
 #include <map>
 
@@ -26,7 +31,7 @@ Eigen::VectorXd channelZero(const TexelGrid& grid, const Image& image) {
 
 /// Solves (alpha W M W + S + lock) x = alpha W M W xbar + div + lock xbar.
 StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
-                         const Eigen::VectorXd& known, const Eigen::MatrixXd& pairTargets,
+                         const Eigen::VectorXd& known, const Eigen::MatrixXd& divergence,
                          const Image& like, const StitchOptions& options) {
   const TexelGrid& grid = domain.grid();
   const TexelOperators& ops = domain.operators();
@@ -38,8 +43,7 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
   // A little plain screening keeps components that no source sees solvable.
   Eigen::SparseMatrix<double> a = options.alpha * wmw + 1e-6 * options.alpha * ops.mass() +
                                   ops.stiffness();
-  Eigen::MatrixXd rhs = options.alpha * (wmw * xbar) +
-                        ops.differential().transpose() * (ops.hodgeStar1() * pairTargets);
+  Eigen::MatrixXd rhs = options.alpha * (wmw * xbar) + divergence;
   StitchResult result;
   std::vector<uint8_t> locked(static_cast<size_t>(n), 0);
   if (!options.lock.empty()) {
@@ -66,6 +70,31 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
   result.image = like;
   scatterTexels(grid, x, result.image);
   return result;
+}
+
+/// Unknowns whose basis functions can be non-zero on each covered cell: the four corners, plus
+/// (on cells a chart boundary crosses, where seams couple the two sides) every unknown that
+/// shares a stiffness entry with a corner. Calls f(cell, list).
+template <typename F>
+void forEachCoveredCell(const TexelGrid& g, const Eigen::SparseMatrix<double>& s, F&& f) {
+  std::vector<int32_t> texels;
+  for (int b = -1; b < g.ny; ++b)
+    for (int a = -1; a < g.nx; ++a) {
+      const int cell = g.cellIndex(a, b);
+      if (g.cellCoverage[cell] == CellCoverage::Empty) continue;
+      texels.clear();
+      for (int y = b; y <= b + 1; ++y)
+        for (int x = a; x <= a + 1; ++x) {
+          const int32_t u = (x >= 0 && y >= 0 && x < g.nx && y < g.ny)
+                                ? g.unknownOfTexel[g.texelIndex(x, y)]
+                                : -1;
+          texels.push_back(u);
+          if (u < 0 || g.cellCoverage[cell] == CellCoverage::Full) continue;
+          for (Eigen::SparseMatrix<double>::InnerIterator it(s, u); it; ++it)
+            texels.push_back(static_cast<int32_t>(it.row()));
+        }
+      f(cell, texels);
+    }
 }
 
 }  // namespace
@@ -107,14 +136,17 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
   const Eigen::MatrixXd xbar = gatherTexels(grid, composite);
   Eigen::VectorXd known(xbar.rows());
   for (Eigen::Index u = 0; u < xbar.rows(); ++u) known[u] = labels[u] > 0 ? 1.0 : 0.0;
-  const auto pairs = domain.operators().texelPairs();
-  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(pairs.size()), xbar.cols());
-  for (size_t p = 0; p < pairs.size(); ++p) {
-    const auto [s, t] = pairs[p];
-    if (labels[s] > 0 && labels[s] == labels[t])
-      g.row(static_cast<Eigen::Index>(p)) = xbar.row(t) - xbar.row(s);
-  }
-  StitchResult result = solveStitch(domain, xbar, known, g, composite, options);
+  // Keep the gradient on cells whose texels all come from one source; zero elsewhere.
+  std::vector<double> beta(grid.cellCoverage.size(), 0.0);
+  forEachCoveredCell(grid, domain.operators().stiffness(),
+                     [&](int cell, const std::vector<int32_t>& texels) {
+                       bool same = true;
+                       for (int32_t u : texels)
+                         same &= u >= 0 && labels[u] > 0 && labels[u] == labels[texels[0]];
+                       beta[cell] = same ? 1.0 : 0.0;
+                     });
+  const Eigen::MatrixXd divergence = domain.operators().modulatedStiffness(beta) * xbar;
+  StitchResult result = solveStitch(domain, xbar, known, divergence, composite, options);
   result.sources = sources;
   return result;
 }
@@ -128,13 +160,12 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
                             std::to_string(confidences.size()) +
                             " confidence maps; give one confidence map per partial");
   const TexelGrid& grid = domain.grid();
-  const auto pairs = domain.operators().texelPairs();
   const auto n = static_cast<Eigen::Index>(grid.unknownCount());
   const Eigen::Index channels = partials[0].channels;
   Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(n, channels);
   Eigen::VectorXd weight = Eigen::VectorXd::Zero(n);
-  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(pairs.size()), channels);
-  Eigen::VectorXd pairWeight = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(pairs.size()));
+  std::vector<Eigen::MatrixXd> values;
+  std::vector<Eigen::VectorXd> confidence;
   for (size_t i = 0; i < partials.size(); ++i) {
     const std::string name = "partial " + std::to_string(i);
     checkSize(grid, partials[i], name);
@@ -142,21 +173,32 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
     if (partials[i].channels != channels)
       throw InvalidInputError(name + " has " + std::to_string(partials[i].channels) +
                               " channels, partial 0 has " + std::to_string(channels));
-    const Eigen::MatrixXd x = gatherTexels(grid, partials[i]);
-    const Eigen::VectorXd w = channelZero(grid, confidences[i]).cwiseMax(0.0).cwiseMin(1.0);
+    values.push_back(gatherTexels(grid, partials[i]));
+    confidence.push_back(channelZero(grid, confidences[i]).cwiseMax(0.0).cwiseMin(1.0));
     for (Eigen::Index u = 0; u < n; ++u) {
-      sum.row(u) += w[u] * x.row(u);
-      weight[u] += w[u];
-    }
-    for (size_t p = 0; p < pairs.size(); ++p) {
-      const auto [s, t] = pairs[p];
-      const double wp = std::min(w[s], w[t]);
-      if (wp <= 0.0) continue;
-      const auto row = static_cast<Eigen::Index>(p);
-      g.row(row) += wp * (x.row(t) - x.row(s));
-      pairWeight[row] += wp;
+      sum.row(u) += confidence.back()[u] * values.back().row(u);
+      weight[u] += confidence.back()[u];
     }
   }
+  // A partial's weight on a cell = its smallest confidence over the cell's texels; the target
+  // gradient is the weighted mean of the partials' gradients, zero where none sees the cell.
+  const size_t cells = grid.cellCoverage.size();
+  std::vector<std::vector<double>> beta(partials.size(), std::vector<double>(cells, 0.0));
+  forEachCoveredCell(grid, domain.operators().stiffness(),
+                     [&](int cell, const std::vector<int32_t>& texels) {
+                       double total = 0.0;
+                       for (size_t i = 0; i < partials.size(); ++i) {
+                         double least = 1.0;
+                         for (int32_t u : texels) least = u >= 0 ? std::min(least, confidence[i][u]) : 0.0;
+                         beta[i][cell] = least;
+                         total += least;
+                       }
+                       for (size_t i = 0; i < partials.size(); ++i)
+                         beta[i][cell] = total > 0.0 ? beta[i][cell] / total : 0.0;
+                     });
+  Eigen::MatrixXd divergence = Eigen::MatrixXd::Zero(n, channels);
+  for (size_t i = 0; i < partials.size(); ++i)
+    divergence += domain.operators().modulatedStiffness(beta[i]) * values[i];
   Eigen::VectorXd known(n);
   Eigen::MatrixXd xbar(n, channels);
   for (Eigen::Index u = 0; u < n; ++u) {
@@ -164,10 +206,8 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
     xbar.row(u) = weight[u] > 0.0 ? Eigen::RowVectorXd(sum.row(u) / weight[u])
                                   : Eigen::RowVectorXd::Zero(channels);
   }
-  for (Eigen::Index p = 0; p < g.rows(); ++p)
-    if (pairWeight[p] > 0.0) g.row(p) /= pairWeight[p];
   Image like = partials[0];
-  StitchResult result = solveStitch(domain, xbar, known, g, like, options);
+  StitchResult result = solveStitch(domain, xbar, known, divergence, like, options);
   result.sources = static_cast<int>(partials.size());
   return result;
 }

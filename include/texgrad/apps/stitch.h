@@ -11,8 +11,8 @@
 
 namespace texgrad {
 
-/// Parameters of the stitching solve (alpha W M W + S) x = alpha W M W xbar + d^T *1 g, W = 1 on
-/// texels some source sees.
+/// Parameters of the stitching solve (alpha W M W + S) x = alpha W M W xbar + div(g), W = 1 on
+/// texels some source sees, g the target gradient field, blended per lattice cell.
 struct StitchOptions {
   /// Screening weight on the unit-area surface (paper default 1e2): how strongly the result keeps
   /// the sources' absolute colours; gradients inside each source are always kept.
@@ -34,14 +34,14 @@ struct StitchResult {
 };
 
 /// Composite mode: `composite` holds each texel from one source, `segments` a distinct colour
-/// per source (black = no source). Differences between texels of different sources, or involving
-/// unknown texels, are set to zero.
+/// per source (black = no source). The target gradient is the composite's on cells whose texels
+/// all share one source, zero on cells that straddle sources or touch unknown texels.
 StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
                              const Image& segments, const StitchOptions& options);
 
-/// Partials mode: N partial textures with confidence maps (channel 0 in [0, 1]). Target
-/// differences are the confidence-weighted mean of the partials' differences (weight of a pair =
-/// the smaller confidence of its two texels); zero where no partial sees both texels.
+/// Partials mode: N partial textures with confidence maps (channel 0 in [0, 1]). The target
+/// gradient on a cell is the confidence-weighted mean of the partials' gradients (a partial's
+/// weight on a cell = its smallest confidence over the cell's texels); zero where none sees it.
 StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>& partials,
                             const std::vector<Image>& confidences, const StitchOptions& options);
 

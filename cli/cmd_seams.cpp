@@ -1,0 +1,71 @@
+// `texgrad seams`: re-solve the texels along chart boundaries for the smoothest values.
+#include "cli_common.h"
+#include "commands.h"
+#include "texgrad/apps/seams.h"
+#include "texgrad/atlas/seam_jump.h"
+#include "texgrad/io/image_io.h"
+
+namespace texgrad::cli {
+namespace {
+
+struct SeamsArgs {
+  std::string mesh, texture, out, mask, slot = "baseColor", bitDepth;
+  ReportArgs report;
+  double weldTolerance = 0.0;
+};
+
+void runSeams(const SeamsArgs& args) {
+  StageTimer timer;
+  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
+  const Image mask = args.mask.empty() ? Image() : readImage(args.mask);
+  timer.lap("read");
+  const TexelDomain domain(std::move(mesh), texture.width, texture.height, {},
+                           terminalProgress(!args.report.quiet));
+  timer.lap("operators");
+  const SeamsResult result = smoothSeams(domain, texture, mask);
+  timer.lap("solve");
+  writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth);
+  timer.lap("write");
+  if (args.report.timings) timer.print();
+  if (args.report.json) {
+    const SeamJump before = measureSeamJump(domain.mesh(), domain.atlas(), texture);
+    const SeamJump after = measureSeamJump(domain.mesh(), domain.atlas(), result.image);
+    printJson({{"command", "seams"},
+               {"texels", domain.unknowns()},
+               {"free_texels", result.freeTexels},
+               {"seam_jump_before", before.rms},
+               {"seam_jump_after", after.rms},
+               {"stages", timer.json()},
+               {"output", args.out}});
+  }
+}
+
+}  // namespace
+
+void addSeamsCommand(CLI::App& app) {
+  auto args = std::make_shared<SeamsArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "seams",
+      "Hide texture seams: replace the texels along chart boundaries (or under --mask) by the "
+      "smoothest values that agree with all other texels (a Dirichlet problem in the "
+      "seam-continuous texel space). Other texels are unchanged bit for bit.");
+  cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
+      ->required();
+  cmd->add_option("texture", args->texture, "Texture (default: the mesh's --texture-slot texture)");
+  cmd->add_option("--out,-o", args->out, "Output image, or .gltf/.glb for a glTF copy")->required();
+  cmd->add_option("--mask", args->mask,
+                  "Re-solve the active texels under this mask (white) instead of the chart "
+                  "boundary texels");
+  cmd->add_option("--texture-slot", args->slot, "Texture of the mesh to use and replace")
+      ->default_val("baseColor");
+  cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: the input's)");
+  cmd->add_option("--weld-tolerance", args->weldTolerance,
+                  "Weld 3-D positions closer than this (model units); 0 = exact matches only")
+      ->default_val(0.0)
+      ->check(CLI::NonNegativeNumber);
+  addReportOptions(cmd, args->report);
+  cmd->callback([args] { exitStatus = runGuarded([&] { runSeams(*args); }); });
+}
+
+}  // namespace texgrad::cli

@@ -1,0 +1,125 @@
+// `texgrad stitch`: merge textures from several sources without lighting seams (paper §7.2).
+#include <cstdio>
+#include <iostream>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "texgrad/apps/stitch.h"
+#include "texgrad/core/error.h"
+#include "texgrad/io/image_io.h"
+
+namespace texgrad::cli {
+namespace {
+
+struct StitchArgs {
+  std::string mesh, composite, segments, partials, confidence, lock, out, resolution, bitDepth;
+  StitchOptions options;
+  SolverArgs solver;
+  ReportArgs report;
+  double weldTolerance = 0.0;
+};
+
+/// Expands a printf pattern with one integer (e.g. 'texels-%02d.png') for 0, 1, ... while files
+/// exist.
+std::vector<std::string> expandPattern(const std::string& pattern, const std::string& flag) {
+  const size_t percent = pattern.find('%');
+  if (percent == std::string::npos || pattern.find('%', percent + 1) != std::string::npos ||
+      pattern.find_first_of("di", percent) == std::string::npos)
+    throw InvalidInputError(flag + " '" + pattern +
+                            "' must contain exactly one integer field such as %02d");
+  std::vector<std::string> files;
+  for (int k = 0; k < 1000; ++k) {
+    std::vector<char> buffer(pattern.size() + 32);
+    std::snprintf(buffer.data(), buffer.size(), pattern.c_str(), k);
+    if (!std::filesystem::exists(buffer.data())) {
+      if (k == 0) continue;  // numbering may start at 1
+      break;
+    }
+    files.emplace_back(buffer.data());
+  }
+  if (files.empty()) throw IoError("no file matches " + flag + " '" + pattern + "'");
+  return files;
+}
+
+void runStitch(StitchArgs args) {
+  StageTimer timer;
+  args.options.solver = args.solver.settings();
+  const bool compositeMode = !args.composite.empty();
+  if (compositeMode == !args.partials.empty())
+    throw InvalidInputError("give either --composite with --segments, or --partials with "
+                            "--confidence");
+  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  Image composite, segments;
+  std::vector<Image> partials, confidences;
+  if (compositeMode) {
+    if (args.segments.empty()) throw InvalidInputError("--composite needs --segments MASK");
+    composite = readImage(args.composite);
+    segments = readImage(args.segments);
+  } else {
+    if (args.confidence.empty()) throw InvalidInputError("--partials needs --confidence PATTERN");
+    for (const std::string& f : expandPattern(args.partials, "--partials"))
+      partials.push_back(readImage(f));
+    for (const std::string& f : expandPattern(args.confidence, "--confidence"))
+      confidences.push_back(readImage(f));
+  }
+  if (!args.lock.empty()) args.options.lock = readImage(args.lock);
+  const Image& first = compositeMode ? composite : partials.front();
+  timer.lap("read");
+  const TexelDomain domain(std::move(mesh), first.width, first.height, {},
+                           terminalProgress(!args.report.quiet));
+  timer.lap("operators");
+  const StitchResult result =
+      compositeMode ? stitchComposite(domain, composite, segments, args.options)
+                    : stitchPartials(domain, partials, confidences, args.options);
+  timer.lap("solve");
+  writeTextureOutput(args.out, domain.mesh(), result.image, "baseColor", args.bitDepth);
+  timer.lap("write");
+  if (args.report.timings) timer.print();
+  if (args.report.json)
+    printJson({{"command", "stitch"},
+               {"mode", compositeMode ? "composite" : "partials"},
+               {"texels", domain.unknowns()},
+               {"sources", result.sources},
+               {"locked_texels", result.lockedTexels},
+               {"solve", toJson(result.report)},
+               {"stages", timer.json()},
+               {"output", args.out}});
+}
+
+}  // namespace
+
+void addStitchCommand(CLI::App& app) {
+  auto args = std::make_shared<StitchArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "stitch",
+      "Merge textures captured from several sources (cameras, scans) into one without visible "
+      "seams between them: gradients inside each source are kept, jumps between sources are "
+      "removed (paper Sec. 7.2). Either a composite texture with a source mask, or N partial "
+      "textures with confidence maps.");
+  cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
+      ->required();
+  cmd->add_option("--composite", args->composite, "Composite texture (each texel from one source)");
+  cmd->add_option("--segments", args->segments,
+                  "Source mask for --composite: one colour per source, black = no source");
+  cmd->add_option("--partials", args->partials,
+                  "printf pattern of the partial textures, e.g. 'texels-%02d.png'");
+  cmd->add_option("--confidence", args->confidence,
+                  "printf pattern of the confidence maps (0 = unseen, 1 = best), one per partial");
+  cmd->add_option("--lock", args->lock,
+                  "Mask (white = locked): these texels keep their input value exactly");
+  cmd->add_option("--out,-o", args->out, "Output image, or .gltf/.glb for a glTF copy")->required();
+  cmd->add_option("--alpha", args->options.alpha,
+                  "Screening weight: larger keeps the sources' absolute colours (paper 1e2)")
+      ->default_val(1e2)
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: the input's)");
+  cmd->add_option("--weld-tolerance", args->weldTolerance,
+                  "Weld 3-D positions closer than this (model units); 0 = exact matches only")
+      ->default_val(0.0)
+      ->check(CLI::NonNegativeNumber);
+  addSolverOptions(cmd, args->solver, 10);
+  addReportOptions(cmd, args->report);
+  cmd->callback([args] { exitStatus = runGuarded([&] { runStitch(*args); }); });
+}
+
+}  // namespace texgrad::cli
