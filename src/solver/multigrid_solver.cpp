@@ -30,6 +30,22 @@ std::vector<BoxRow> boxRowsOf(const GridLevel& level) {
 
 namespace {
 
+/// Adds 1e-12 * max|diag| to every diagonal entry of a coarse Galerkin operator. P^T A P is
+/// singular when prolongation columns are dependent (tiny or thin charts: several coarse nodes
+/// whose only child is the same fine texel), and so are its boundary blocks; every null vector v
+/// has P v = 0, so the shift changes no coarse correction, while CHOLMOD can factorise.
+void shiftDiagonal(Eigen::SparseMatrix<double>& a) {
+  double largest = 0.0;
+  for (int k = 0; k < a.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(a, k); it; ++it)
+      if (it.row() == k) largest = std::max(largest, std::abs(it.value()));
+  const double shift = 1e-12 * largest;
+  for (int k = 0; k < a.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(a, k); it; ++it)
+      if (it.row() == k) it.valueRef() += shift;
+}
+
+
 using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point start) {
@@ -149,6 +165,7 @@ struct MultigridSolver<Scalar>::Impl {
                                 " non-zeros, the pattern given to init has " +
                                 std::to_string(nonZeros[static_cast<size_t>(l)]) +
                                 "; call init again when the sparsity changes");
+      if (l > 0) shiftDiagonal(a);
       Level& lv = levels[static_cast<size_t>(l)];
       if (l < coarsest() || l == 0) {
         detail::assignBoundary(hierarchy.level(l), a, lv.sys);

@@ -29,7 +29,9 @@ std::string toString(SolverKind kind);
 struct SolverSettings {
   SolverKind kind = SolverKind::Multigrid;
   MultigridOptions multigrid;  ///< levels, sweeps, threads
-  bool singlePrecision = true; ///< float V-cycles (factorisations stay double)
+  /// Float V-cycles (factorisations stay double); the residual is formed in double each cycle
+  /// (mixed-precision refinement), so float cycles reach double-precision accuracy.
+  bool singlePrecision = true;
   int cycles = 6;              ///< V-cycles (Multigrid) or max CG iterations / 20 (MultigridCg)
   double tolerance = 0.0;      ///< stop early below this relative residual (0: run all cycles)
   /// Throws InvalidInputError naming the first bad field.
