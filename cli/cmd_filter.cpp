@@ -95,7 +95,7 @@ void addFilterCommand(CLI::App& app) {
                   "Weld 3-D positions closer than this (model units); 0 = exact matches only")
       ->default_val(0.0)
       ->check(CLI::NonNegativeNumber);
-  addSolverOptions(cmd, args->solver, 6);
+  addSolverOptions(cmd, args->solver, FilterOptions().solver.cycles);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runFilter(*args); }); });
 }

@@ -16,5 +16,18 @@ void addMaskCommand(CLI::App& app);
 void addDilateCommand(CLI::App& app);
 /// `texgrad sample`: writes the built-in sample mesh and texture.
 void addSampleCommand(CLI::App& app);
+/// `texgrad filter`: gradient-domain smoothing / sharpening.
+void addFilterCommand(CLI::App& app);
+/// `texgrad stitch`: seamless merging of several sources.
+void addStitchCommand(CLI::App& app);
+/// `texgrad seams`: re-solve chart-boundary texels.
+void addSeamsCommand(CLI::App& app);
+/// `texgrad lic`: line integral convolution of a vector field or curvature directions.
+void addLicCommand(CLI::App& app);
+/// `texgrad react`: Gray-Scott reaction-diffusion pattern.
+void addReactCommand(CLI::App& app);
+void addGeodesicCommand(CLI::App& app);  ///< `texgrad geodesic`: heat-method distances.
+/// `texgrad view`: browser viewer server.
+void addViewCommand(CLI::App& app);
 
 }  // namespace texgrad::cli

@@ -12,11 +12,19 @@ int main(int argc, char** argv) {
       "Meshes: .obj (+.mtl), .ply, .gltf, .glb, or builtin:NAME for a procedural mesh."};
   app.set_version_flag("--version", "texgrad 0.1.0");
   app.require_subcommand(1);
+  app.option_defaults()->always_capture_default(true);  // --help shows every default
   app.fallthrough(false);
   texgrad::cli::addInfoCommand(app);
   texgrad::cli::addMaskCommand(app);
   texgrad::cli::addDilateCommand(app);
   texgrad::cli::addSampleCommand(app);
+  texgrad::cli::addFilterCommand(app);
+  texgrad::cli::addStitchCommand(app);
+  texgrad::cli::addSeamsCommand(app);
+  texgrad::cli::addLicCommand(app);
+  texgrad::cli::addReactCommand(app);
+  texgrad::cli::addGeodesicCommand(app);
+  texgrad::cli::addViewCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

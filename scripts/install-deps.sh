@@ -1,12 +1,17 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages texgrad needs to build, test and benchmark (run as root).
+# With --viewer also Node.js, npm and Chromium for the viewer page and its end-to-end tests.
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libsuitesparse-dev libtbb-dev
   libopenimageio-dev libtinyobjloader-dev libtinygltf-dev nlohmann-json3-dev libstb-dev
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libboost-dev
 )
+if [[ "${1:-}" == "--viewer" ]]; then
+  packages+=(nodejs npm chromium)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

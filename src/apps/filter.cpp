@@ -46,9 +46,11 @@ void InteractiveFilter::setParameters(double alpha, double beta,
   const Eigen::SparseMatrix<double> sBeta =
       betaPerCell.empty() ? Eigen::SparseMatrix<double>(beta * ops.stiffness())
                           : ops.modulatedStiffness(betaPerCell);
-  const Eigen::SparseMatrix<double> a = alpha * ops.mass() + ops.stiffness();
   rhs_ = alpha * (ops.mass() * x0_) + sBeta * x0_;
-  solver_.update(a);
+  // The system matrix depends on alpha only: painting beta changes just the right-hand side.
+  if (alpha == alpha_) return;
+  alpha_ = alpha;
+  solver_.update(alpha * ops.mass() + ops.stiffness());
 }
 
 SolveReport InteractiveFilter::step() { return solver_.step(rhs_, x_); }

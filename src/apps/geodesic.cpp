@@ -4,12 +4,15 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <Eigen/LU>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include "texgrad/core/error.h"
@@ -23,8 +26,46 @@ double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-/// Faces per parallel task when building gradient samples (fixed: results do not depend on threads).
+/// Faces per parallel task when building gradient samples (fixed: results do not depend on
+/// threads).
 constexpr int kFacesPerTask = 64;
+/// NearField offset: annulus of chord distances around a source, in texel sizes of its face.
+constexpr double kNearFieldInner = 2.0;
+constexpr double kNearFieldOuter = 4.0;
+/// A source with fewer near-field texels than this falls back to its own value.
+constexpr int kMinNearFieldTexels = 4;
+/// Barycentric tolerance for "texel centre inside a face" (on-edge centres count for both faces).
+constexpr double kInsideTolerance = 1e-9;
+/// Step (texels) when walking open boundary edges to find the texels their footprints cross.
+constexpr double kBoundaryStep = 0.25;
+/// Isoline half-width in texels (lines fade out linearly to this distance from the level).
+constexpr double kIsolineHalfWidth = 0.75;
+/// How dark an isoline is at its centre (0: colour unchanged, 1: black).
+constexpr double kIsolineDarkness = 0.85;
+/// Colour of texels no source reaches in distanceColourMap.
+constexpr float kUnreachableGrey = 0.5f;
+
+/// Viridis colour map at t in [0, 1] (9 samples of matplotlib's table, linearly interpolated).
+Eigen::Vector3d viridis(double t) {
+  static const std::array<Eigen::Vector3d, 9> table{
+      Eigen::Vector3d(0.267, 0.005, 0.329), Eigen::Vector3d(0.279, 0.175, 0.483),
+      Eigen::Vector3d(0.230, 0.322, 0.546), Eigen::Vector3d(0.173, 0.449, 0.558),
+      Eigen::Vector3d(0.128, 0.567, 0.551), Eigen::Vector3d(0.158, 0.684, 0.502),
+      Eigen::Vector3d(0.369, 0.789, 0.383), Eigen::Vector3d(0.678, 0.864, 0.190),
+      Eigen::Vector3d(0.993, 0.906, 0.144)};
+  const double x = std::clamp(t, 0.0, 1.0) * static_cast<double>(table.size() - 1);
+  const size_t i = std::min(static_cast<size_t>(x), table.size() - 2);
+  const double f = x - static_cast<double>(i);
+  return (1.0 - f) * table[i] + f * table[i + 1];
+}
+
+/// Eigenvalues (smaller, larger) of a symmetric 2x2 matrix.
+std::pair<double, double> eigenvalues(const Eigen::Matrix2d& m) {
+  const double mean = 0.5 * (m(0, 0) + m(1, 1));
+  const double half = 0.5 * (m(0, 0) - m(1, 1));
+  const double radius = std::sqrt(half * half + m(0, 1) * m(0, 1));
+  return {mean - radius, mean + radius};
+}
 
 /// Barycentric coordinates of the point of triangle (a, b, c) nearest to p, in any dimension
 /// (Ericson, Real-Time Collision Detection, Sec. 5.1.5).
@@ -72,7 +113,8 @@ ResolvedSource finish(const TexelDomain& domain, const fem::SurfacePoint& point,
 ResolvedSource resolveVertex(const TexelDomain& domain, int64_t vertex) {
   const TexturedMesh& mesh = domain.mesh();
   if (vertex < 0 || vertex >= static_cast<int64_t>(mesh.positions.size()))
-    throw InvalidInputError("source vertex " + std::to_string(vertex) + " is out of range; the mesh has " +
+    throw InvalidInputError("source vertex " + std::to_string(vertex) +
+                            " is out of range; the mesh has " +
                             std::to_string(mesh.positions.size()) + " vertices (0-based indices)");
   const fem::TexelBasis& basis = domain.operators().basis();
   for (int f = 0; f < basis.faceCount(); ++f) {
@@ -136,15 +178,68 @@ ResolvedSource resolvePoint(const TexelDomain& domain, const Eigen::Vector3d& ta
   return finish(domain, point, best);
 }
 
+/// Per unknown: the face whose UV triangle holds the texel centre (first in index order where
+/// UVs overlap), or -1 if the centre lies outside M.
+std::vector<int32_t> centreFaces(const TexelDomain& domain) {
+  const TexelGrid& grid = domain.grid();
+  const fem::TexelBasis& basis = domain.operators().basis();
+  std::vector<int32_t> faces(static_cast<size_t>(grid.unknownCount()), -1);
+  for (int f = 0; f < basis.faceCount(); ++f) {
+    if (!basis.faceValid(f)) continue;
+    const auto& c = basis.faceCorners(f);
+    Eigen::Matrix2d e;
+    e.col(0) = c[1] - c[0];
+    e.col(1) = c[2] - c[0];
+    const Eigen::Matrix2d inverse = e.inverse();
+    const Eigen::Vector2d lo = c[0].cwiseMin(c[1]).cwiseMin(c[2]);
+    const Eigen::Vector2d hi = c[0].cwiseMax(c[1]).cwiseMax(c[2]);
+    for (int y = std::max(0, static_cast<int>(std::ceil(lo.y())));
+         y <= std::min(grid.ny - 1, static_cast<int>(std::floor(hi.y()))); ++y)
+      for (int x = std::max(0, static_cast<int>(std::ceil(lo.x())));
+           x <= std::min(grid.nx - 1, static_cast<int>(std::floor(hi.x()))); ++x) {
+        const int32_t u = grid.unknownOfTexel[static_cast<size_t>(grid.texelIndex(x, y))];
+        if (u < 0 || faces[static_cast<size_t>(u)] >= 0) continue;
+        const Eigen::Vector2d st = inverse * (Eigen::Vector2d(x, y) - c[0]);
+        if (st.minCoeff() >= -kInsideTolerance && st.sum() <= 1.0 + kInsideTolerance)
+          faces[static_cast<size_t>(u)] = f;
+      }
+  }
+  return faces;
+}
+
 }  // namespace
 
 ResolvedSource resolveSource(const TexelDomain& domain, const GeodesicSource& source) {
   switch (source.kind) {
-    case GeodesicSource::Kind::Vertex: return resolveVertex(domain, source.vertex);
-    case GeodesicSource::Kind::Uv: return resolveUv(domain, source.uv);
-    case GeodesicSource::Kind::Point: return resolvePoint(domain, source.point);
+    case GeodesicSource::Kind::Vertex:
+      return resolveVertex(domain, source.vertex);
+    case GeodesicSource::Kind::Uv:
+      return resolveUv(domain, source.uv);
+    case GeodesicSource::Kind::Point:
+      return resolvePoint(domain, source.point);
   }
   throw InvalidInputError("unknown geodesic source kind");
+}
+
+GeodesicOffset parseGeodesicOffset(const std::string& text) {
+  if (text == "near-field") return GeodesicOffset::NearField;
+  if (text == "source") return GeodesicOffset::Source;
+  throw InvalidInputError("unknown geodesic offset '" + text + "'; use near-field or source");
+}
+
+std::string toString(GeodesicOffset offset) {
+  return offset == GeodesicOffset::NearField ? "near-field" : "source";
+}
+
+GeodesicBoundary parseGeodesicBoundary(const std::string& text) {
+  if (text == "average") return GeodesicBoundary::Average;
+  if (text == "neumann") return GeodesicBoundary::Neumann;
+  throw InvalidInputError("unknown geodesic boundary condition '" + text +
+                          "'; use average or neumann");
+}
+
+std::string toString(GeodesicBoundary boundary) {
+  return boundary == GeodesicBoundary::Average ? "average" : "neumann";
 }
 
 void GeodesicOptions::validate() const {
@@ -172,7 +267,7 @@ struct GeodesicSolver::Gradients {
     double weight, hxx, hxy, hyy;
   };
 
-  std::vector<CellSample> cells;        ///< sorted by cell row
+  std::vector<CellSample> cells;  ///< sorted by cell row
   std::vector<int64_t> rowBegin;  ///< cells of row b: [rowBegin[b + 1], rowBegin[b + 2]), b >= -1
   std::vector<SeamSample> seams;
   std::vector<int32_t> seamTexels;
@@ -218,7 +313,8 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
           double area = 0.0;
           Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
           for (size_t i = 0; i < poly.size(); ++i) {
-            const Eigen::Vector2d p = poly[i].p - origin, q = poly[(i + 1) % poly.size()].p - origin;
+            const Eigen::Vector2d p = poly[i].p - origin,
+                                  q = poly[(i + 1) % poly.size()].p - origin;
             const double cross = p.x() * q.y() - p.y() * q.x();
             area += cross;
             centroid += cross * (p + q);
@@ -251,8 +347,8 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
           dshape.row(5) = (4.0 / 3.0) * (bg[2] + bg[0]).transpose();
           const auto coefficients = pb.coefficients.middleRows(static_cast<Eigen::Index>(6 * e), 6);
           const Eigen::MatrixXd grads = coefficients.transpose() * dshape;  // k x 2
-          SeamSample s{static_cast<int32_t>(chunk.texels.size()), 0, area * root, h(0, 0), h(0, 1),
-                       h(1, 1)};
+          SeamSample s{
+              static_cast<int32_t>(chunk.texels.size()), 0, area * root, h(0, 0), h(0, 1), h(1, 1)};
           for (size_t k = 0; k < pb.texels.size(); ++k) {
             if (pb.texels[k] < 0) continue;
             chunk.texels.push_back(pb.texels[k]);
@@ -347,6 +443,19 @@ GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions&
   diffusionSolver_.update(a1_);
   distanceSolver_.init(a2_);
   distanceSolver_.update(a2_);
+  if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
+    buildDirichlet();
+  const TexturedMesh& mesh = domain.mesh();
+  vertexFaceBegin_.assign(mesh.positions.size() + 1, 0);
+  for (const Triangle& t : mesh.triangles)
+    for (int32_t v : t) ++vertexFaceBegin_[static_cast<size_t>(v) + 1];
+  for (size_t v = 1; v < vertexFaceBegin_.size(); ++v)
+    vertexFaceBegin_[v] += vertexFaceBegin_[v - 1];
+  vertexFaces_.resize(static_cast<size_t>(vertexFaceBegin_.back()));
+  std::vector<int32_t> cursor(vertexFaceBegin_.begin(), vertexFaceBegin_.end() - 1);
+  for (size_t f = 0; f < mesh.triangles.size(); ++f)
+    for (int32_t v : mesh.triangles[f])
+      vertexFaces_[static_cast<size_t>(cursor[static_cast<size_t>(v)]++)] = static_cast<int32_t>(f);
   const int n = domain.unknowns();
   impulse_ = Eigen::MatrixXd::Zero(n, 1);
   resetIterates();
@@ -357,9 +466,50 @@ GeodesicSolver::~GeodesicSolver() = default;
 GeodesicSolver::GeodesicSolver(GeodesicSolver&&) noexcept = default;
 GeodesicSolver& GeodesicSolver::operator=(GeodesicSolver&&) noexcept = default;
 
+void GeodesicSolver::buildDirichlet() {
+  const TexelGrid& grid = domain_->grid();
+  const fem::TexelBasis& basis = domain_->operators().basis();
+  dirichlet_.assign(static_cast<size_t>(domain_->unknowns()), 0);
+  auto mark = [&](int x, int y) {
+    if (x < 0 || y < 0 || x >= grid.nx || y >= grid.ny) return;
+    const int32_t u = grid.unknownOfTexel[static_cast<size_t>(grid.texelIndex(x, y))];
+    if (u >= 0) dirichlet_[static_cast<size_t>(u)] = 1;
+  };
+  for (const FaceEdge& edge : domain_->atlas().openBoundary) {
+    if (!basis.faceValid(edge.face)) continue;
+    const auto& c = basis.faceCorners(edge.face);
+    const Eigen::Vector2d a = c[static_cast<size_t>(edge.corner)];
+    const Eigen::Vector2d b = c[static_cast<size_t>((edge.corner + 1) % 3)];
+    const int steps = static_cast<int>(std::ceil((b - a).norm() / kBoundaryStep)) + 1;
+    for (int k = 0; k <= steps; ++k) {
+      const Eigen::Vector2d p = a + (b - a) * (static_cast<double>(k) / steps);
+      const int x0 = static_cast<int>(std::floor(p.x())), y0 = static_cast<int>(std::floor(p.y()));
+      for (int y = y0; y <= y0 + 1; ++y)
+        for (int x = x0; x <= x0 + 1; ++x) mark(x, y);
+    }
+  }
+  dirichletCount_ = static_cast<int>(std::count(dirichlet_.begin(), dirichlet_.end(), 1));
+  dirichletSolver_ = std::make_unique<SystemSolver>(grid, options_.solver);
+  dirichletSolver_->init(a1_);
+  updateDirichlet();
+}
+
+void GeodesicSolver::updateDirichlet() {
+  // A1 with the rows and columns of held texels reduced to their diagonal: same pattern, SPD.
+  a1Dirichlet_ = a1_;
+  for (int j = 0; j < a1Dirichlet_.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(a1Dirichlet_, j); it; ++it)
+      if ((dirichlet_[static_cast<size_t>(it.row())] || dirichlet_[static_cast<size_t>(j)]) &&
+          it.row() != j)
+        it.valueRef() = 0.0;
+  dirichletSolver_->update(a1Dirichlet_);
+}
+
 void GeodesicSolver::resetIterates() {
   const int n = domain_->unknowns();
   u_ = Eigen::MatrixXd::Zero(n, 1);
+  uDirichlet_ = Eigen::MatrixXd::Zero(n, 1);
+  heat_ = Eigen::MatrixXd::Zero(n, 1);
   divergence_ = Eigen::MatrixXd::Zero(n, 1);
   y_ = Eigen::MatrixXd::Zero(n, 1);
   distances_ = Eigen::VectorXd::Zero(n);
@@ -373,6 +523,7 @@ void GeodesicSolver::setAlpha(double alpha) {
   const TexelOperators& ops = domain_->operators();
   a1_ = options_.alpha * ops.mass() + ops.stiffness();
   diffusionSolver_.update(a1_);
+  if (dirichletSolver_) updateDirichlet();
   resetIterates();
 }
 
@@ -393,10 +544,153 @@ void GeodesicSolver::setSources(std::span<const GeodesicSource> sources) {
   sources_ = std::move(resolved);
   sourceWeights_ = std::move(weights);
   impulse_ = std::move(impulse);
+  impulseDirichlet_ = impulse_;
+  for (size_t u = 0; u < dirichlet_.size(); ++u)
+    if (dirichlet_[u]) impulseDirichlet_(static_cast<Eigen::Index>(u), 0) = 0.0;
+  collectNearField();
+  findReachable();
   resetIterates();
 }
 
-void GeodesicSolver::setSource(const GeodesicSource& source) { setSources({&source, 1}); }
+void GeodesicSolver::findReachable() {
+  reachable_.assign(static_cast<size_t>(domain_->unknowns()), 0);
+  std::vector<int32_t> queue;
+  for (const auto& weights : sourceWeights_)
+    for (const fem::TexelWeight& w : weights)
+      if (!reachable_[static_cast<size_t>(w.unknown)]) {
+        reachable_[static_cast<size_t>(w.unknown)] = 1;
+        queue.push_back(w.unknown);
+      }
+  const int* outer = a1_.outerIndexPtr();
+  const int* inner = a1_.innerIndexPtr();
+  for (size_t head = 0; head < queue.size(); ++head)
+    for (int k = outer[queue[head]]; k < outer[queue[head] + 1]; ++k)
+      if (!reachable_[static_cast<size_t>(inner[k])]) {
+        reachable_[static_cast<size_t>(inner[k])] = 1;
+        queue.push_back(inner[k]);
+      }
+}
+
+void GeodesicSolver::collectNearField() {
+  nearField_.clear();
+  if (options_.offset != GeodesicOffset::NearField) return;
+  const TexturedMesh& mesh = domain_->mesh();
+  const fem::TexelBasis& basis = domain_->operators().basis();
+  const TexelGrid& grid = domain_->grid();
+  const auto& metric = domain_->operators().metric();
+  std::vector<double> inner, outer;  // model units
+  for (const ResolvedSource& source : sources_) {
+    const double texel =
+        std::sqrt(eigenvalues(metric[static_cast<size_t>(source.point.face)]).second) * scale_;
+    inner.push_back(kNearFieldInner * texel);
+    outer.push_back(kNearFieldOuter * texel);
+  }
+  // Interior texels whose centres lie in faces within `outer` of a source (breadth-first over
+  // faces sharing a 3-D vertex, so the search crosses seams), with their 3-D positions.
+  std::vector<std::pair<int32_t, Eigen::Vector3d>> candidates;
+  std::vector<int32_t> stamp(mesh.triangles.size(), -1);
+  std::vector<int32_t> queue;
+  for (size_t s = 0; s < sources_.size(); ++s) {
+    const Eigen::Vector3d& centre = sources_[s].position;
+    queue.assign(1, sources_[s].point.face);
+    stamp[static_cast<size_t>(queue[0])] = static_cast<int32_t>(s);
+    for (size_t head = 0; head < queue.size(); ++head) {
+      const int f = queue[head];
+      const Triangle& tri = mesh.triangles[static_cast<size_t>(f)];
+      const Eigen::Vector3d &p0 = mesh.positions[tri[0]], &p1 = mesh.positions[tri[1]],
+                            &p2 = mesh.positions[tri[2]];
+      const Eigen::Vector3d b = closestBarycentric(centre, p0, p1, p2);
+      if ((b[0] * p0 + b[1] * p1 + b[2] * p2 - centre).norm() > outer[s]) continue;
+      for (int32_t v : tri)
+        for (int32_t k = vertexFaceBegin_[static_cast<size_t>(v)];
+             k < vertexFaceBegin_[static_cast<size_t>(v) + 1]; ++k) {
+          const int32_t g = vertexFaces_[static_cast<size_t>(k)];
+          if (stamp[static_cast<size_t>(g)] == static_cast<int32_t>(s)) continue;
+          stamp[static_cast<size_t>(g)] = static_cast<int32_t>(s);
+          queue.push_back(g);
+        }
+      if (!basis.faceValid(f)) continue;
+      // Affine map grid -> 3-D of the face; texel centres within `outer` lie in an ellipse around
+      // the grid point nearest (in 3-D) to the source.
+      const auto& c = basis.faceCorners(f);
+      Eigen::Matrix2d e;
+      e.col(0) = c[1] - c[0];
+      e.col(1) = c[2] - c[0];
+      const Eigen::Matrix2d eInv = e.inverse();
+      Eigen::Matrix<double, 3, 2> edges;
+      edges.col(0) = p1 - p0;
+      edges.col(1) = p2 - p0;
+      const Eigen::Matrix<double, 3, 2> jacobian = edges * eInv;
+      const Eigen::Matrix2d g = jacobian.transpose() * jacobian;
+      const double smallest = eigenvalues(g).first;
+      if (!(smallest > 0.0)) continue;
+      const Eigen::Vector2d nearest = c[0] + g.inverse() * (jacobian.transpose() * (centre - p0));
+      const double radius = outer[s] / std::sqrt(smallest);
+      const Eigen::Vector2d reach = Eigen::Vector2d::Constant(radius);
+      const Eigen::Vector2d lo = c[0].cwiseMin(c[1]).cwiseMin(c[2]).cwiseMax(nearest - reach);
+      const Eigen::Vector2d hi = c[0].cwiseMax(c[1]).cwiseMax(c[2]).cwiseMin(nearest + reach);
+      const int x0 = std::max(0, static_cast<int>(std::ceil(lo.x())));
+      const int y0 = std::max(0, static_cast<int>(std::ceil(lo.y())));
+      const int x1 = std::min(grid.nx - 1, static_cast<int>(std::floor(hi.x())));
+      const int y1 = std::min(grid.ny - 1, static_cast<int>(std::floor(hi.y())));
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const int texel = grid.texelIndex(x, y);
+          if (grid.texelClass[static_cast<size_t>(texel)] != TexelClass::Interior) continue;
+          const Eigen::Vector2d st = eInv * (Eigen::Vector2d(x, y) - c[0]);
+          if (st.minCoeff() < -kInsideTolerance || st.sum() > 1.0 + kInsideTolerance) continue;
+          candidates.emplace_back(grid.unknownOfTexel[static_cast<size_t>(texel)], p0 + edges * st);
+        }
+    }
+  }
+  std::sort(candidates.begin(), candidates.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  candidates.erase(std::unique(candidates.begin(), candidates.end(),
+                               [](const auto& a, const auto& b) { return a.first == b.first; }),
+                   candidates.end());
+  // Keep a texel if it lies in the annulus of its nearest source.
+  for (const auto& [unknown, position] : candidates) {
+    size_t nearest = 0;
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t s = 0; s < sources_.size(); ++s) {
+      const double d = (position - sources_[s].position).norm();
+      if (d < best) {
+        best = d;
+        nearest = s;
+      }
+    }
+    if (best >= inner[nearest] && best <= outer[nearest])
+      nearField_.push_back({unknown, static_cast<int32_t>(nearest), best / scale_});
+  }
+  std::stable_sort(
+      nearField_.begin(), nearField_.end(),
+      [](const NearFieldTexel& a, const NearFieldTexel& b) { return a.source < b.source; });
+}
+
+double GeodesicSolver::offset() const {
+  // Per source: median of y - chord over its near-field texels (the median shrugs off texels
+  // across a crease, where chord < geodesic), else the value at the source; then the mean.
+  double total = 0.0;
+  std::vector<double> differences;
+  auto texel = nearField_.begin();
+  for (size_t s = 0; s < sources_.size(); ++s) {
+    differences.clear();
+    for (; texel != nearField_.end() && texel->source == static_cast<int32_t>(s); ++texel)
+      differences.push_back(y_(texel->unknown, 0) - texel->distance);
+    if (static_cast<int>(differences.size()) >= kMinNearFieldTexels) {
+      const auto middle = differences.begin() + static_cast<std::ptrdiff_t>(differences.size() / 2);
+      std::nth_element(differences.begin(), middle, differences.end());
+      total += *middle;
+      continue;
+    }
+    for (const fem::TexelWeight& w : sourceWeights_[s]) total += w.weight * y_(w.unknown, 0);
+  }
+  return total / static_cast<double>(sources_.size());
+}
+
+void GeodesicSolver::setSource(const GeodesicSource& source) {
+  setSources({&source, 1});
+}
 
 void GeodesicSolver::requireSources() const {
   if (sources_.empty())
@@ -405,22 +699,32 @@ void GeodesicSolver::requireSources() const {
 
 void GeodesicSolver::diffusionStep(bool full) {
   const auto start = Clock::now();
-  diffusionReport_ = full ? diffusionSolver_.solve(impulse_, u_) : diffusionSolver_.step(impulse_, u_);
+  diffusionReport_ =
+      full ? diffusionSolver_.solve(impulse_, u_) : diffusionSolver_.step(impulse_, u_);
+  if (dirichletSolver_) {
+    if (full)
+      dirichletSolver_->solve(impulseDirichlet_, uDirichlet_);
+    else
+      dirichletSolver_->step(impulseDirichlet_, uDirichlet_);
+    heat_ = 0.5 * (u_ + uDirichlet_);
+  } else {
+    heat_ = u_;
+  }
   timings_.diffusion = secondsSince(start);
 }
 
 void GeodesicSolver::distanceStep(bool full) {
   auto start = Clock::now();
   divergence_.setZero();
-  gradients_->divergence(u_.data(), divergence_.data());
+  gradients_->divergence(heat_.data(), divergence_.data());
   timings_.divergence = secondsSince(start);
   start = Clock::now();
-  distanceReport_ = full ? distanceSolver_.solve(divergence_, y_) : distanceSolver_.step(divergence_, y_);
-  double offset = 0.0;
-  for (const auto& weights : sourceWeights_)
-    for (const fem::TexelWeight& w : weights) offset += w.weight * y_(w.unknown, 0);
-  offset /= static_cast<double>(sourceWeights_.size());
-  distances_ = (y_.col(0).array() - offset) * scale_;
+  distanceReport_ =
+      full ? distanceSolver_.solve(divergence_, y_) : distanceSolver_.step(divergence_, y_);
+  distances_ = (y_.col(0).array() - offset()) * scale_;
+  for (size_t u = 0; u < reachable_.size(); ++u)
+    if (!reachable_[u])
+      distances_[static_cast<Eigen::Index>(u)] = std::numeric_limits<double>::infinity();
   timings_.distance = secondsSince(start);
 }
 
@@ -436,6 +740,57 @@ void GeodesicSolver::solve() {
   distanceStep(true);
 }
 
+Image distanceColourMap(const TexelGrid& grid, const Eigen::VectorXd& distances, double maxDistance,
+                        int isolines) {
+  if (distances.size() != grid.unknownCount())
+    throw InvalidInputError("distanceColourMap: expected one distance per unknown (" +
+                            std::to_string(grid.unknownCount()) + "), got " +
+                            std::to_string(distances.size()));
+  if (isolines < 0) throw InvalidInputError("isolines must be >= 0");
+  Image image(grid.imageWidth, grid.imageHeight, 3, PixelFormat::UInt8);
+  const double scale = maxDistance > 0.0 ? 1.0 / maxDistance : 0.0;
+  auto level = [&](int x, int y) -> std::optional<double> {  // distance in isoline units
+    if (x < 0 || y < 0 || x >= grid.nx || y >= grid.ny) return std::nullopt;
+    const int32_t u = grid.unknownOfTexel[static_cast<size_t>(grid.texelIndex(x, y))];
+    if (u < 0) return std::nullopt;
+    if (!std::isfinite(distances[u])) return std::nullopt;
+    return distances[u] * scale * (isolines + 1);
+  };
+  // Derivative of the level along one axis by central (or one-sided) differences.
+  auto slope = [&](double centre, std::optional<double> minus, std::optional<double> plus) {
+    if (minus && plus) return 0.5 * (*plus - *minus);
+    if (plus) return *plus - centre;
+    if (minus) return centre - *minus;
+    return 0.0;
+  };
+  tbb::parallel_for(0, grid.ny, [&](int y) {
+    for (int x = 0; x < grid.nx; ++x) {
+      if (!grid.inImage(x, y)) continue;
+      const int32_t u = grid.unknownOfTexel[static_cast<size_t>(grid.texelIndex(x, y))];
+      if (u < 0) continue;
+      if (!std::isfinite(distances[u])) {
+        for (int c = 0; c < 3; ++c) image.at(x + grid.x0, y + grid.y0, c) = kUnreachableGrey;
+        continue;
+      }
+      Eigen::Vector3d colour = viridis(distances[u] * scale);
+      if (isolines > 0) {
+        const double s = *level(x, y);
+        const double gx = slope(s, level(x - 1, y), level(x + 1, y));
+        const double gy = slope(s, level(x, y - 1), level(x, y + 1));
+        const double nearest = std::round(s);
+        const double gradient = std::hypot(gx, gy);
+        if (nearest >= 1.0 && nearest <= isolines && gradient > 0.0) {
+          const double texels = std::abs(s - nearest) / gradient;
+          colour *= 1.0 - kIsolineDarkness * std::clamp(1.0 - texels / kIsolineHalfWidth, 0.0, 1.0);
+        }
+      }
+      for (int c = 0; c < 3; ++c)
+        image.at(x + grid.x0, y + grid.y0, c) = static_cast<float>(colour[c]);
+    }
+  });
+  return image;
+}
+
 GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,
                                 const GeodesicOptions& options) {
   GeodesicSolver solver(domain, options);
@@ -447,13 +802,28 @@ GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const Geode
   result.diffusionReport = solver.diffusionReport();
   result.distanceReport = solver.distanceReport();
   result.timings = solver.timings();
-  Eigen::Index best = 0;
-  result.maxDistance = result.distances.maxCoeff(&best);
-  result.farthestUnknown = static_cast<int32_t>(best);
+  // Farthest texel among those whose centre lies on M (gutter texels extrapolate past the
+  // boundary); any reachable texel if no centre does (charts narrower than a texel).
   const TexelGrid& grid = domain.grid();
+  const std::vector<int32_t> faces = centreFaces(domain);
+  Eigen::Index best = -1;
+  for (int pass = 0; pass < 2 && best < 0; ++pass)
+    for (Eigen::Index u = 0; u < result.distances.size(); ++u) {
+      if (!std::isfinite(result.distances[u])) continue;
+      if (pass == 0 && faces[static_cast<size_t>(u)] < 0) continue;
+      if (best < 0 || result.distances[u] > result.distances[best]) best = u;
+    }
+  for (Eigen::Index u = 0; u < result.distances.size(); ++u)
+    if (!std::isfinite(result.distances[u])) ++result.unreachableTexels;
+  result.maxDistance = result.distances[best];  // sources' texels are always reachable
+  result.farthestUnknown = static_cast<int32_t>(best);
   const int texel = grid.texelOfUnknown[static_cast<size_t>(best)];
-  result.farthestUv = grid.toUv(Eigen::Vector2d(texel % grid.nx, texel / grid.nx));
-  result.farthestPosition = resolveSource(domain, GeodesicSource::atUv(result.farthestUv)).position;
+  const Eigen::Vector2d centre(texel % grid.nx, texel / grid.nx);
+  result.farthestUv = grid.toUv(centre);
+  const int32_t face = faces[static_cast<size_t>(best)];
+  result.farthestPosition =
+      face >= 0 ? domain.operators().basis().position({face, centre})
+                : resolveSource(domain, GeodesicSource::atUv(result.farthestUv)).position;
   return result;
 }
 

@@ -3,6 +3,7 @@
 // (as in the authors' reference implementation).
 #include "texgrad/apps/lic.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -20,6 +21,9 @@ namespace {
 constexpr int kLicCycles = 30;
 /// Relative residual LIC solves aim for with the iterative solvers.
 constexpr double kLicTolerance = 1e-8;
+/// Texels with a mass diagonal below this fraction of the mean get a pinning term (see
+/// pinNegligibleTexels); real atlases have boundary texels down to 1e-17 of the mean.
+constexpr double kNegligibleMass = 1e-10;
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -34,7 +38,9 @@ uint64_t mix(uint64_t z) {
 }
 
 /// Uniform value in [0, 1) from the top 53 bits of a hash.
-double unitValue(uint64_t hash) { return static_cast<double>(hash >> 11) * 0x1.0p-53; }
+double unitValue(uint64_t hash) {
+  return static_cast<double>(hash >> 11) * 0x1.0p-53;
+}
 
 /// Fully saturated, full-value colour of hue h in [0, 1).
 Eigen::Vector3d hueColour(double hue) {
@@ -42,12 +48,18 @@ Eigen::Vector3d hueColour(double hue) {
   const int sector = std::min(5, static_cast<int>(h6));
   const double f = h6 - sector;
   switch (sector) {
-    case 0: return {1.0, f, 0.0};
-    case 1: return {1.0 - f, 1.0, 0.0};
-    case 2: return {0.0, 1.0, f};
-    case 3: return {0.0, 1.0 - f, 1.0};
-    case 4: return {f, 0.0, 1.0};
-    default: return {1.0, 0.0, 1.0 - f};
+    case 0:
+      return {1.0, f, 0.0};
+    case 1:
+      return {1.0 - f, 1.0, 0.0};
+    case 2:
+      return {0.0, 1.0, f};
+    case 3:
+      return {0.0, 1.0 - f, 1.0};
+    case 4:
+      return {f, 0.0, 1.0};
+    default:
+      return {1.0, 0.0, 1.0 - f};
   }
 }
 
@@ -55,6 +67,17 @@ Eigen::Vector3d hueColour(double hue) {
 double metricArea(const TexturedMesh& mesh, const TexelGrid& grid, const Eigen::Matrix2d& m,
                   int f) {
   return std::sqrt(std::max(0.0, m.determinant())) * std::abs(fem::gridArea(mesh, grid, f));
+}
+
+/// Adds a tiny diagonal term to the rows of texels whose basis function barely touches the
+/// surface (diag of `mass` below kNegligibleMass times its mean): such rows are numerically
+/// singular (rounding-level Cholesky pivots) and their values would be noise. Other texels are
+/// not measurably affected.
+void pinNegligibleTexels(const SparseMatrixd& mass, double scale, SparseMatrixd& system) {
+  const Eigen::VectorXd diagonal = mass.diagonal();
+  const double floor = kNegligibleMass * diagonal.mean();
+  for (Eigen::Index t = 0; t < diagonal.size(); ++t)
+    if (diagonal(t) < floor) system.coeffRef(t, t) += scale * floor;
 }
 
 void requirePositive(double value, const char* name) {
@@ -80,6 +103,8 @@ void LicOptions::validate() const {
   if (!(sharpenBeta >= 0.0) || !std::isfinite(sharpenBeta))
     throw InvalidInputError("LIC sharpening beta must be a number >= 0, got " +
                             std::to_string(sharpenBeta));
+  if (!(contrast >= 0.0) || !std::isfinite(contrast))
+    throw InvalidInputError("LIC contrast must be a number >= 0, got " + std::to_string(contrast));
   if (channels != 1 && channels != 3)
     throw InvalidInputError("LIC noise must have 1 (grey) or 3 (colour) channels, got " +
                             std::to_string(channels));
@@ -94,8 +119,8 @@ std::vector<Eigen::Matrix2d> anisotropicMetric(const TexturedMesh& mesh, const T
   const int faces = static_cast<int>(mesh.faceCount());
   if (static_cast<int>(g.size()) != faces || static_cast<int>(fieldTexel.size()) != faces)
     throw InvalidInputError("anisotropicMetric: expected one metric and one vector per face (" +
-                            std::to_string(faces) + "), got " + std::to_string(g.size()) +
-                            " and " + std::to_string(fieldTexel.size()));
+                            std::to_string(faces) + "), got " + std::to_string(g.size()) + " and " +
+                            std::to_string(fieldTexel.size()));
   // Area-weighted RMS g-length of the field, so epsilon is relative to a unit field.
   double weighted = 0.0, area = 0.0;
   for (int f = 0; f < faces; ++f) {
@@ -105,8 +130,8 @@ std::vector<Eigen::Matrix2d> anisotropicMetric(const TexturedMesh& mesh, const T
   }
   if (!(weighted > 0.0) || !std::isfinite(weighted))
     throw InvalidInputError(
-        "the vector field is zero on every face (or not finite); LIC needs a direction to "
-        "follow");
+        "the vector field is zero on every face (or not finite), so LIC has no direction to "
+        "follow; a principal-curvature field vanishes on planar meshes, use a field file there");
   const double rms = std::sqrt(weighted / area);
 
   std::vector<Eigen::Matrix2d> h(g);
@@ -129,8 +154,7 @@ std::vector<Eigen::Matrix2d> anisotropicMetric(const TexturedMesh& mesh, const T
 
 Eigen::MatrixXd licNoise(const TexelGrid& grid, int channels, uint64_t seed) {
   if (channels != 1 && channels != 3)
-    throw InvalidInputError("LIC noise must have 1 or 3 channels, got " +
-                            std::to_string(channels));
+    throw InvalidInputError("LIC noise must have 1 or 3 channels, got " + std::to_string(channels));
   Eigen::MatrixXd noise(grid.unknownCount(), channels);
   const uint64_t seedHash = mix(seed);
   for (int u = 0; u < grid.unknownCount(); ++u) {
@@ -185,6 +209,7 @@ LineIntegralConvolution::LineIntegralConvolution(TexelDomain& domain,
     ops.setMetric(s.metric);
     s.massH = ops.mass();
     system = options.alpha * s.massH + ops.stiffness();
+    pinNegligibleTexels(s.massH, options.alpha, system);
   } catch (...) {
     ops.setMetric(g);
     throw;
@@ -194,7 +219,8 @@ LineIntegralConvolution::LineIntegralConvolution(TexelDomain& domain,
   s.diffusion.init(system);
   s.diffusion.update(system);
   if (s.sharpens()) {
-    const SparseMatrixd sharpenSystem = options.sharpenAlpha * s.mass + s.stiffness;
+    SparseMatrixd sharpenSystem = options.sharpenAlpha * s.mass + s.stiffness;
+    pinNegligibleTexels(s.mass, options.sharpenAlpha, sharpenSystem);
     s.sharpening.emplace(domain.grid(), options.solver);
     s.sharpening->init(sharpenSystem);
     s.sharpening->update(sharpenSystem);
@@ -204,8 +230,7 @@ LineIntegralConvolution::LineIntegralConvolution(TexelDomain& domain,
 
 LineIntegralConvolution::~LineIntegralConvolution() = default;
 
-Eigen::MatrixXd LineIntegralConvolution::convolve(const Eigen::MatrixXd& noise,
-                                                  LicReport* report) {
+Eigen::MatrixXd LineIntegralConvolution::convolve(const Eigen::MatrixXd& noise, LicReport* report) {
   Impl& s = *impl_;
   if (noise.rows() != s.domain.unknowns())
     throw InvalidInputError("LIC noise has " + std::to_string(noise.rows()) +
@@ -213,7 +238,8 @@ Eigen::MatrixXd LineIntegralConvolution::convolve(const Eigen::MatrixXd& noise,
                             " unknowns");
   LicReport local = s.setup;
   const Eigen::MatrixXd b = s.options.alpha * (s.massH * noise);
-  Eigen::MatrixXd x = noise;
+  // Start from the noise's mean (S_h kills constants): residual below that of x = 0 or x = noise.
+  Eigen::MatrixXd x = noise.colwise().mean().replicate(noise.rows(), 1);
   local.diffusion = s.diffusion.solve(b, x);
   if (s.sharpens()) {
     const Eigen::MatrixXd rhs =
@@ -230,18 +256,39 @@ const std::vector<Eigen::Matrix2d>& LineIntegralConvolution::metric() const {
   return impl_->metric;
 }
 
-const LicReport& LineIntegralConvolution::setupReport() const { return impl_->setup; }
+const LicReport& LineIntegralConvolution::setupReport() const {
+  return impl_->setup;
+}
+
+Eigen::MatrixXd licContrast(const Eigen::MatrixXd& values, const Eigen::VectorXd& weights,
+                            double contrast) {
+  if (weights.size() != values.rows())
+    throw InvalidInputError("licContrast: " + std::to_string(weights.size()) + " weights for " +
+                            std::to_string(values.rows()) + " values");
+  Eigen::MatrixXd out = values;
+  const double total = weights.sum();
+  if (contrast > 0.0 && total > 0.0)
+    for (Eigen::Index c = 0; c < values.cols(); ++c) {
+      const double mean = weights.dot(values.col(c)) / total;
+      const Eigen::ArrayXd centred = values.col(c).array() - mean;
+      const double deviation = std::sqrt((weights.array() * centred.square()).sum() / total);
+      const double gain = deviation > 0.0 ? contrast / deviation : 0.0;
+      out.col(c).array() = 0.5 + centred * gain;
+    }
+  return out.cwiseMax(0.0).cwiseMin(1.0);
+}
 
 LicResult lineIntegralConvolution(TexelDomain& domain,
                                   const std::vector<Eigen::Vector2d>& fieldTexel,
                                   const LicOptions& options) {
   LineIntegralConvolution lic(domain, fieldTexel, options);
   LicResult result;
-  result.values = lic.convolve(licNoise(domain.grid(), options.channels, options.seed),
-                               &result.report);
+  result.values =
+      lic.convolve(licNoise(domain.grid(), options.channels, options.seed), &result.report);
   const TexelGrid& grid = domain.grid();
   result.image = Image(grid.imageWidth, grid.imageHeight, options.channels, PixelFormat::UInt8);
-  scatterTexels(grid, result.values.cwiseMax(0.0).cwiseMin(1.0), result.image);
+  const Eigen::VectorXd area = domain.operators().mass() * Eigen::VectorXd::Ones(domain.unknowns());
+  scatterTexels(grid, licContrast(result.values, area, options.contrast), result.image);
   return result;
 }
 

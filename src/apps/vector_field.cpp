@@ -23,7 +23,9 @@ constexpr size_t kValueBytes = 8;
 /// usable tangent plane (a sliver or a collapsed face).
 constexpr double kDegenerateGram = 1e-14;
 
-int dimensionOf(FieldBasis basis) { return basis == FieldBasis::Intrinsic ? 2 : 3; }
+int dimensionOf(FieldBasis basis) {
+  return basis == FieldBasis::Intrinsic ? 2 : 3;
+}
 
 const char* basisName(FieldBasis basis) {
   return basis == FieldBasis::Intrinsic ? "intrinsic (2 values per face)"
@@ -148,7 +150,8 @@ FaceVectorField readFaceVectorField(const std::filesystem::path& path, FieldBasi
   if (bytes.size() < kHeaderBytes)
     throw InvalidInputError(where + " is " + std::to_string(bytes.size()) +
                             " bytes long, too short for its int32 count header");
-  const auto count32 = static_cast<int32_t>(static_cast<uint32_t>(readLittleEndian(bytes.data(), 4)));
+  const auto count32 =
+      static_cast<int32_t>(static_cast<uint32_t>(readLittleEndian(bytes.data(), 4)));
   if (count32 < 0)
     throw InvalidInputError(where + " has a negative vector count (" + std::to_string(count32) +
                             ")");
@@ -191,7 +194,8 @@ void writeFaceVectorField(const std::filesystem::path& path, const FaceVectorFie
     if (!out) throw IoError("cannot create vector field file " + temporary.string());
     writeLittleEndian(out, static_cast<uint32_t>(field.vectors.size()), kHeaderBytes);
     for (const Eigen::Vector3d& v : field.vectors)
-      for (int c = 0; c < dim; ++c) writeLittleEndian(out, std::bit_cast<uint64_t>(v(c)), kValueBytes);
+      for (int c = 0; c < dim; ++c)
+        writeLittleEndian(out, std::bit_cast<uint64_t>(v(c)), kValueBytes);
     out.close();
     if (!out) throw IoError("cannot write vector field file " + temporary.string());
   });
@@ -245,10 +249,10 @@ PrincipalCurvatures principalCurvatures(const TexturedMesh& mesh, const Curvatur
   for (int round = 0; round < options.smoothingRounds; ++round) smoothTensors(mesh, area, tensors);
 
   PrincipalCurvatures out;
-  out.kMax.assign(faces, 0.0);
-  out.kMin.assign(faces, 0.0);
-  out.dirMax.assign(faces, Eigen::Vector3d::Zero());
-  out.dirMin.assign(faces, Eigen::Vector3d::Zero());
+  out.kMajor.assign(faces, 0.0);
+  out.kMinor.assign(faces, 0.0);
+  out.dirMajor.assign(faces, Eigen::Vector3d::Zero());
+  out.dirMinor.assign(faces, Eigen::Vector3d::Zero());
   for (size_t f = 0; f < faces; ++f) {
     if (area[f] == 0.0) continue;
     const Eigen::Matrix<double, 3, 2>& frame = frames[f];
@@ -257,10 +261,16 @@ PrincipalCurvatures principalCurvatures(const TexturedMesh& mesh, const Curvatur
     const double mean = 0.5 * (a + c), radius = std::hypot(0.5 * (a - c), b);
     // Eigenvector of the larger eigenvalue of [a b; b c] at angle theta from the first axis.
     const double theta = 0.5 * std::atan2(2.0 * b, a - c);
-    out.kMax[f] = mean + radius;
-    out.kMin[f] = mean - radius;
-    out.dirMax[f] = std::cos(theta) * frame.col(0) + std::sin(theta) * frame.col(1);
-    out.dirMin[f] = -std::sin(theta) * frame.col(0) + std::cos(theta) * frame.col(1);
+    const Eigen::Vector3d dirLarge =
+        std::cos(theta) * frame.col(0) + std::sin(theta) * frame.col(1);
+    const Eigen::Vector3d dirSmall =
+        -std::sin(theta) * frame.col(0) + std::cos(theta) * frame.col(1);
+    const double large = mean + radius, small = mean - radius;
+    const bool largeIsMajor = std::abs(large) >= std::abs(small);
+    out.kMajor[f] = largeIsMajor ? large : small;
+    out.kMinor[f] = largeIsMajor ? small : large;
+    out.dirMajor[f] = largeIsMajor ? dirLarge : dirSmall;
+    out.dirMinor[f] = largeIsMajor ? dirSmall : dirLarge;
   }
   return out;
 }
@@ -272,8 +282,9 @@ FaceVectorField curvatureField(const TexturedMesh& mesh, CurvatureDirection dire
   field.basis = FieldBasis::Extrinsic;
   field.vectors.resize(mesh.faceCount());
   for (size_t f = 0; f < mesh.faceCount(); ++f) {
-    const Eigen::Vector3d& d = direction == CurvatureDirection::Max ? k.dirMax[f] : k.dirMin[f];
-    field.vectors[f] = std::abs(k.kMax[f] - k.kMin[f]) * d;
+    const Eigen::Vector3d& d =
+        direction == CurvatureDirection::Major ? k.dirMajor[f] : k.dirMinor[f];
+    field.vectors[f] = std::abs(k.kMajor[f] - k.kMinor[f]) * d;
   }
   return field;
 }

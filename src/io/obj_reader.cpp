@@ -121,9 +121,13 @@ TexturedMesh readObj(const std::filesystem::path& path) {
   config.triangulate = false;  // fanned below, after the indices are checked
   config.vertex_color = false;
   tinyobj::ObjReader reader;
-  if (!reader.ParseFromFile(path.string(), config))
-    throw InvalidInputError(path.string() + ": not a readable OBJ file (" + reader.Error() +
+  if (!reader.ParseFromFile(path.string(), config)) {
+    std::string why = reader.Error();  // tinyobjloader's text may span lines: keep it on one
+    std::replace(why.begin(), why.end(), '\n', ' ');
+    while (!why.empty() && why.back() == ' ') why.pop_back();
+    throw InvalidInputError(path.string() + ": not a readable OBJ file (" + why +
                             "); check that it is a Wavefront OBJ");
+  }
 
   const tinyobj::attrib_t& attrib = reader.GetAttrib();
   TexturedMesh mesh;

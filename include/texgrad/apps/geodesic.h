@@ -6,11 +6,13 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "texgrad/apps/system_solver.h"
 #include "texgrad/apps/texel_domain.h"
 #include "texgrad/fem/texel_basis.h"
+#include "texgrad/io/image.h"
 #include "texgrad/solver/solve_report.h"
 
 namespace texgrad {
@@ -19,9 +21,9 @@ namespace texgrad {
 struct GeodesicSource {
   enum class Kind : uint8_t { Vertex, Uv, Point };
   Kind kind = Kind::Vertex;
-  int64_t vertex = -1;                               ///< Kind::Vertex: index into positions
-  Eigen::Vector2d uv = Eigen::Vector2d::Zero();      ///< Kind::Uv: texture coordinates
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< Kind::Point: 3-D position
+  int64_t vertex = -1;                              ///< Kind::Vertex: index into positions
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();     ///< Kind::Uv: texture coordinates
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< Kind::Point: 3-D position
 
   static GeodesicSource atVertex(int64_t index) { return {Kind::Vertex, index, {}, {}}; }
   static GeodesicSource atUv(const Eigen::Vector2d& uv) { return {Kind::Uv, -1, uv, {}}; }
@@ -30,9 +32,9 @@ struct GeodesicSource {
 
 /// A source snapped onto the atlas domain M.
 struct ResolvedSource {
-  fem::SurfacePoint point;                              ///< face and grid coordinates
-  Eigen::Vector2d uv = Eigen::Vector2d::Zero();         ///< texture coordinates of the point
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();   ///< 3-D position (model units)
+  fem::SurfacePoint point;                             ///< face and grid coordinates
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();        ///< texture coordinates of the point
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< 3-D position (model units)
   /// How far the request was moved to reach M: UV units for UV sources, model units for 3-D
   /// points, 0 for vertices.
   double snapDistance = 0.0;
@@ -44,12 +46,50 @@ struct ResolvedSource {
 /// vertex that only touches UV-degenerate faces.
 ResolvedSource resolveSource(const TexelDomain& domain, const GeodesicSource& source);
 
+/// How the additive constant of the distance is fixed (Eq. 6 determines y only up to a constant).
+enum class GeodesicOffset : uint8_t {
+  /// Match the 3-D chord distance on interior texels 2 to 4 texels away from the nearest source
+  /// (median per source), where chord and geodesic agree to O(r^3 curvature^2). Removes the
+  /// 0.3-0.4 texel bias that the rounded tip of y at the source gives Source (so the value at a
+  /// source is O(texel) rather than exactly 0). Falls back to Source for a source with no such
+  /// texel. Beyond the paper.
+  NearField,
+  /// Value 0 at the sources (paper Sec. 7.3: y -= y_t); mean over several sources.
+  Source,
+};
+
+/// Parses "near-field" or "source"; throws InvalidInputError otherwise.
+GeodesicOffset parseGeodesicOffset(const std::string& text);
+/// Name accepted by parseGeodesicOffset.
+std::string toString(GeodesicOffset offset);
+
+/// Boundary condition of the diffusion step on surfaces with open boundary edges.
+enum class GeodesicBoundary : uint8_t {
+  /// Mean of the Neumann and Dirichlet diffusions (Crane et al. 2013, Sec. 3.2.3): keeps level
+  /// sets from bending to meet the boundary at right angles. Dirichlet (u = 0) is imposed on the
+  /// texels whose footprint an open boundary edge crosses. Costs a third system, and only where
+  /// the mesh has open boundary edges.
+  Average,
+  /// Natural (Neumann) boundary only, as in the paper. Average degenerates to this for a source
+  /// within about a texel of the boundary (its Dirichlet diffusion vanishes).
+  Neumann,
+};
+
+/// Parses "average" or "neumann"; throws InvalidInputError otherwise.
+GeodesicBoundary parseGeodesicBoundary(const std::string& text);
+/// Name accepted by parseGeodesicBoundary.
+std::string toString(GeodesicBoundary boundary);
+
 /// Parameters of the heat method; CLI flags map one-to-one onto these fields.
 struct GeodesicOptions {
   /// Screening weight of the diffusion step (Eq. 5) on the unit-area surface: the heat time is
   /// t = 1 / alpha. Larger values follow the surface more tightly but underflow sooner far from
   /// the source; smaller values smooth the distance near the source and around obstacles.
   double alpha = 1e3;
+  /// How the constant of the distance is fixed.
+  GeodesicOffset offset = GeodesicOffset::NearField;
+  /// Boundary condition of the diffusion on surfaces with boundary.
+  GeodesicBoundary boundary = GeodesicBoundary::Average;
   /// Solver for both systems; `cycles` V-cycles (or one direct solve) per system in solve().
   SolverSettings solver;
   /// Throws InvalidInputError naming the first bad field.
@@ -66,15 +106,19 @@ struct GeodesicTimings {
 
 /// Heat-method distances, ready to store.
 struct GeodesicResult {
-  /// Per unknown (TexelGrid unknown order): distance in model units, 0 at the sources.
+  /// Per unknown (TexelGrid unknown order): distance in model units (GeodesicOffset says what
+  /// the sources get); +infinity on parts of the surface not connected to a source.
   Eigen::VectorXd distances;
   std::vector<ResolvedSource> sources;  ///< where the sources were snapped to
-  double maxDistance = 0.0;             ///< largest texel value (model units)
-  int32_t farthestUnknown = -1;         ///< unknown holding maxDistance
-  Eigen::Vector2d farthestUv = Eigen::Vector2d::Zero();        ///< centre of that texel (UV)
-  Eigen::Vector3d farthestPosition = Eigen::Vector3d::Zero();  ///< nearest surface point (3-D)
-  SolveReport diffusionReport;          ///< Eq. 5 solve
-  SolveReport distanceReport;           ///< Eq. 6 solve
+  /// Largest distance (model units) over texels whose centre lies on M (gutter texels, which
+  /// extrapolate past the boundary, are left out).
+  double maxDistance = 0.0;
+  int32_t unreachableTexels = 0;                         ///< texels not connected to any source
+  int32_t farthestUnknown = -1;                          ///< unknown holding maxDistance
+  Eigen::Vector2d farthestUv = Eigen::Vector2d::Zero();  ///< centre of that texel (UV)
+  Eigen::Vector3d farthestPosition = Eigen::Vector3d::Zero();  ///< that centre on the surface (3-D)
+  SolveReport diffusionReport;                                 ///< Eq. 5 solve
+  SolveReport distanceReport;                                  ///< Eq. 6 solve
   GeodesicTimings timings;
 };
 
@@ -82,17 +126,21 @@ struct GeodesicResult {
 ///
 /// init (constructor, once per mesh and resolution): per-element gradient samples of the texel
 /// basis, symbolic and numeric set-up of both systems A1 = alpha M + S and A2 = S + eps M
-/// (eps = kDistanceScreening: S alone is singular). Per source: b = sum_s phi_t(p_s) (a unit
+/// (eps = kDistanceScreening: S alone is singular), and with GeodesicBoundary::Average on a mesh
+/// with open boundary, A1 with Dirichlet rows. Per source set: b = sum_s phi_t(p_s) (a unit
 /// impulse per source), A1 u = b; X = -grad u / |grad u|_g per element with one-point quadrature;
-/// A2 y = div_h(g X); y -= mean of y over the sources.
+/// A2 y = div_h(g X); the constant of y is fixed by GeodesicOptions::offset.
 ///
 /// Units: operators live on the unit-area surface (DESIGN.md Sec. 2); distances() multiplies
 /// by unitScale() = sqrt(3-D area of M) so every distance it returns is in model units.
-/// Assumes M is connected: on a component without a source the distance is meaningless.
+/// Texels with no path of coupled texels (the support graph of S, which crosses seams) to a
+/// source lie on a part of the surface no source reaches: their distance is +infinity.
 /// The domain must outlive the solver.
 class GeodesicSolver {
  public:
   /// eps of A2 = S + eps M on the unit-area surface (well below S's first nonzero eigenvalue).
+  /// eps M is far below float rounding of S: float V-cycles on A2 converge only because
+  /// SystemSolver computes their residuals in double (iterative refinement).
   static constexpr double kDistanceScreening = 1e-5;
 
   /// Builds gradient samples and runs both solvers' init and update phases.
@@ -101,8 +149,8 @@ class GeodesicSolver {
   GeodesicSolver(GeodesicSolver&&) noexcept;
   GeodesicSolver& operator=(GeodesicSolver&&) noexcept;
 
-  /// New screening weight: numeric update of A1 only (no symbolic work). Keeps the sources and
-  /// restarts the iteration from zero.
+  /// New screening weight: numeric update of A1 (and its Dirichlet variant) only, no symbolic
+  /// work. Keeps the sources and restarts the iteration from zero.
   void setAlpha(double alpha);
   /// Replaces the sources (at least one) and resets u and y to zero (paper Sec. 7.3).
   void setSources(std::span<const GeodesicSource> sources);
@@ -115,10 +163,16 @@ class GeodesicSolver {
   /// Full solves: settings.cycles V-cycles (or CG / direct) on A1, then on A2.
   void solve();
 
-  /// Current distances per unknown, model units, 0 at the sources (mean over several sources).
+  /// Current distances per unknown, model units (see GeodesicOffset for the value at sources);
+  /// +infinity on parts of the surface not connected to a source.
   const Eigen::VectorXd& distances() const { return distances_; }
-  /// Current diffused impulse u per unknown (Eq. 5, unit-area surface; n x 1).
-  const Eigen::MatrixXd& diffused() const { return u_; }
+  /// Current diffused impulse u per unknown (Eq. 5, unit-area surface; n x 1); the mean of the
+  /// Neumann and Dirichlet diffusions when those are averaged.
+  const Eigen::MatrixXd& diffused() const { return heat_; }
+  /// Per unknown: 1 if connected to a source (finite distance), else 0.
+  const std::vector<uint8_t>& reachable() const { return reachable_; }
+  /// Number of unknowns held at zero by the Dirichlet diffusion (0 when it is not used).
+  int dirichletTexels() const { return dirichletCount_; }
   /// Factor from unit-area-surface lengths to model units: sqrt of the 3-D area of M.
   double unitScale() const { return scale_; }
   /// Sources as snapped onto M.
@@ -133,6 +187,17 @@ class GeodesicSolver {
 
  private:
   struct Gradients;
+  /// Interior texel near a source with its chord distance (unit-area units), for NearField.
+  struct NearFieldTexel {
+    int32_t unknown = -1;
+    int32_t source = -1;
+    double distance = 0.0;
+  };
+  void collectNearField();
+  void findReachable();
+  void buildDirichlet();
+  void updateDirichlet();
+  double offset() const;
   void requireSources() const;
   void resetIterates();
   void diffusionStep(bool full);
@@ -143,10 +208,18 @@ class GeodesicSolver {
   double scale_ = 1.0;
   std::unique_ptr<Gradients> gradients_;
   SystemSolver diffusionSolver_, distanceSolver_;
-  Eigen::SparseMatrix<double> a1_, a2_;
+  std::unique_ptr<SystemSolver> dirichletSolver_;  ///< only with Average on meshes with boundary
+  Eigen::SparseMatrix<double> a1_, a2_, a1Dirichlet_;
+  std::vector<uint8_t> dirichlet_;  ///< per unknown: held at zero in the Dirichlet diffusion
+  int dirichletCount_ = 0;
   std::vector<ResolvedSource> sources_;
   std::vector<std::vector<fem::TexelWeight>> sourceWeights_;  ///< phi_t(p_s) per source
-  Eigen::MatrixXd impulse_, u_, divergence_, y_;              ///< n x 1 blocks for SystemSolver
+  std::vector<NearFieldTexel> nearField_;                     ///< sorted by source
+  std::vector<uint8_t> reachable_;                      ///< per unknown: connected to a source
+  std::vector<int32_t> vertexFaceBegin_, vertexFaces_;  ///< faces around each 3-D vertex (CSR)
+  /// n x 1 blocks for SystemSolver: impulse b (and b with Dirichlet rows zeroed), Neumann and
+  /// Dirichlet diffusions, the heat u used for the gradient, divergence, potential y.
+  Eigen::MatrixXd impulse_, impulseDirichlet_, u_, uDirichlet_, heat_, divergence_, y_;
   Eigen::VectorXd distances_;
   SolveReport diffusionReport_, distanceReport_;
   GeodesicTimings timings_;
@@ -154,8 +227,18 @@ class GeodesicSolver {
 
 /// One-shot heat-method distances from `sources` (at least one): GeodesicSolver + solve(), plus
 /// the farthest texel.
-GeodesicResult geodesicDistance(const TexelDomain& domain,
-                                std::span<const GeodesicSource> sources,
+GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,
                                 const GeodesicOptions& options = {});
+
+}  // namespace texgrad
+
+namespace texgrad {
+
+/// Picture of a distance field for people: W x H RGB (UInt8) image of the grid's texture, with a
+/// viridis ramp from 0 (dark blue) to maxDistance (yellow) on active texels and `isolines`
+/// dark, anti-aliased contour lines at k maxDistance / (isolines + 1), k = 1..isolines.
+/// Inactive texels are black, unreachable (infinite) ones grey; `distances` is per unknown.
+Image distanceColourMap(const TexelGrid& grid, const Eigen::VectorXd& distances, double maxDistance,
+                        int isolines);
 
 }  // namespace texgrad

@@ -34,6 +34,11 @@ struct LicOptions {
   /// Gradient gain beta of the sharpening step: 1 skips it, larger restores more contrast
   /// across the streaks (the reference implementation uses 100).
   double sharpenBeta = 100.0;
+  /// Output contrast: each channel is mapped to mean 0.5 and this (surface-area weighted)
+  /// standard deviation before clamping to [0, 1] (diffusion along long streaks averages the noise
+  /// to a flat grey, and sharpening changes its scale with resolution). 0 keeps the raw values
+  /// (clamped).
+  double contrast = 0.2;
   /// Noise channels: 1 = grey values uniform in [0, 1], 3 = random fully saturated hues.
   int channels = 1;
   /// Seed of the noise; the same seed and inputs give the same texture.
@@ -62,8 +67,8 @@ Eigen::MatrixXd licNoise(const TexelGrid& grid, int channels, uint64_t seed);
 
 /// What one LIC run did.
 struct LicReport {
-  SolveReport diffusion;   ///< anisotropic diffusion solve
-  SolveReport sharpening;  ///< sharpening solve (empty when sharpenBeta == 1)
+  SolveReport diffusion;      ///< anisotropic diffusion solve
+  SolveReport sharpening;     ///< sharpening solve (empty when sharpenBeta == 1)
   double setupSeconds = 0.0;  ///< metric, assembly, solver init and update of both systems
   int zeroFieldFaces = 0;     ///< faces with positive UV area where the field vanishes
 };
@@ -96,14 +101,21 @@ class LineIntegralConvolution {
 
 /// Output of lineIntegralConvolution.
 struct LicResult {
-  /// Domain's image size, options.channels channels, float; active texels hold the convolved
-  /// noise clamped to [0, 1], inactive texels 0.
+  /// Domain's image size, options.channels channels (written as 8-bit by default); active
+  /// texels hold the convolved noise after the contrast mapping, inactive texels 0.
   Image image;
-  Eigen::MatrixXd values;  ///< unclamped values per unknown (unknowns x channels)
+  Eigen::MatrixXd values;  ///< raw convolved values per unknown (unknowns x channels)
   LicReport report;
 };
 
-/// One-shot LIC: noise from options.seed, diffusion, sharpening, image.
+/// Maps each column to mean 0.5 and standard deviation `contrast`, then clamps to [0, 1];
+/// contrast 0 only clamps; constant columns become 0.5. Mean and deviation are weighted by
+/// `weights` (per unknown, e.g. the surface area of each texel's basis function, M 1), so texels
+/// that barely touch the surface cannot skew them.
+Eigen::MatrixXd licContrast(const Eigen::MatrixXd& values, const Eigen::VectorXd& weights,
+                            double contrast);
+
+/// One-shot LIC: noise from options.seed, diffusion, sharpening, contrast, image.
 LicResult lineIntegralConvolution(TexelDomain& domain,
                                   const std::vector<Eigen::Vector2d>& fieldTexel,
                                   const LicOptions& options);

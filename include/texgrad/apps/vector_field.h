@@ -46,8 +46,8 @@ std::vector<Eigen::Vector2d> fieldInTexelCoordinates(const TexturedMesh& mesh,
 
 /// Which principal curvature direction a curvature field follows.
 enum class CurvatureDirection : uint8_t {
-  Max,  ///< direction of the larger principal curvature k_max (around a cylinder)
-  Min,  ///< direction of the smaller principal curvature k_min (along a cylinder)
+  Major,  ///< direction of the principal curvature of larger magnitude (around a cylinder)
+  Minor,  ///< direction of the principal curvature of smaller magnitude (along a cylinder)
 };
 
 /// Options of principalCurvatures.
@@ -61,11 +61,12 @@ struct CurvatureOptions {
 
 /// Per-face principal curvatures and directions of the mesh (welded positions).
 struct PrincipalCurvatures {
-  /// Per face, k_max >= k_min in 1 / mesh units; positive where the surface bends away from its
-  /// normal side (a sphere with outward normals has k = 1 / radius).
-  std::vector<double> kMax, kMin;
+  /// Per face, the principal curvatures with |kMajor| >= |kMinor|, in 1 / mesh units; positive
+  /// where the surface bends away from its normal side (a sphere with outward normals has
+  /// k = 1 / radius). Ordering by magnitude makes the directions independent of orientation.
+  std::vector<double> kMajor, kMinor;
   /// Per face, unit 3-D directions in the face plane (zero for faces with a degenerate triangle).
-  std::vector<Eigen::Vector3d> dirMax, dirMin;
+  std::vector<Eigen::Vector3d> dirMajor, dirMinor;
 };
 
 /// Estimates the shape operator per face from the differences of area-weighted vertex normals
@@ -75,7 +76,7 @@ PrincipalCurvatures principalCurvatures(const TexturedMesh& mesh,
                                         const CurvatureOptions& options = {});
 
 /// Extrinsic field of paper §7.4 / Fig. 18: the chosen principal direction scaled by
-/// |k_max - k_min| (so umbilic regions, where the direction is undefined, get short vectors).
+/// |k_major - k_minor| (so umbilic regions, where the direction is undefined, get short vectors).
 FaceVectorField curvatureField(const TexturedMesh& mesh, CurvatureDirection direction,
                                const CurvatureOptions& options = {});
 

@@ -1,0 +1,100 @@
+// `texgrad view`: serves the browser viewer for one mesh and app (filter, geodesic); the solving
+// is the apps' and the serving the viewer module's, this file only maps flags onto their options.
+#include <iostream>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "texgrad/apps/texel_domain.h"
+#include "texgrad/viewer/viewer_server.h"
+#include "texgrad/viewer/viewer_session.h"
+
+namespace texgrad::cli {
+namespace {
+
+struct ViewArgs {
+  std::string mesh, texture, app = "filter", resolution, out;
+  double weldTolerance = 0.0;
+  viewer::ViewerAppOptions appOptions;
+  viewer::SessionOptions session;
+  viewer::ServerOptions server;
+};
+
+void runView(ViewArgs& args) {
+  args.server.webRoot = args.server.webRoot.empty() ? TEXGRAD_VIEWER_DIST : args.server.webRoot;
+  const viewer::ViewerAppKind kind = viewer::parseViewerAppKind(args.app);
+  args.appOptions.validate();
+  args.session.savePath = args.out;
+  args.session.validate();
+  args.server.validate();
+  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  Image texture = loadTexture(mesh, args.mesh, args.texture);
+  int width = texture.width, height = texture.height;
+  if (!args.resolution.empty()) std::tie(width, height) = parseResolution(args.resolution);
+  if (width != texture.width || height != texture.height)
+    throw InvalidInputError("--resolution must match the texture (" +
+                            std::to_string(texture.width) + "x" + std::to_string(texture.height) +
+                            "); resample the texture first");
+  const int32_t faces = static_cast<int32_t>(mesh.faceCount());
+  std::cerr << "texgrad view: building the " << width << "x" << height << " texel domain...\n";
+  const TexelDomain domain(std::move(mesh), width, height, {}, terminalProgress(true));
+  viewer::ViewerSession session(viewer::makeViewerApp(kind, domain, texture, args.appOptions),
+                                faces, args.session);
+  viewer::ViewerServer server(session, domain, args.server);
+  if (!server.token().empty())
+    std::cout << "texgrad view: bound to non-loopback " << args.server.host
+              << "; every request must carry the access token " << server.token() << "\n";
+  std::cout << "texgrad view: " << args.app << " app on " << domain.unknowns() << " texels, open "
+            << server.url() << "\n"
+            << std::flush;
+  session.start();
+  server.run();
+  session.stop();
+}
+
+}  // namespace
+
+void addViewCommand(CLI::App& app) {
+  auto args = std::make_shared<ViewArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "view",
+      "Serve an interactive viewer in the browser: paint filter strokes or click geodesic sources "
+      "and watch the solver refine one V-cycle per frame. Binds to 127.0.0.1; any other --host "
+      "prints a random access token that every request must carry.");
+  cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
+      ->required();
+  cmd->add_option("texture", args->texture, "Texture (default: the mesh's base-colour texture)");
+  cmd->add_option("--app", args->app, "Interactive app")
+      ->check(CLI::IsMember({"filter", "geodesic"}))
+      ->default_val("filter");
+  cmd->add_option("--host", args->server.host, "Address to bind (IP literal or localhost)")
+      ->default_val("127.0.0.1");
+  cmd->add_option("--port", args->server.port, "TCP port (0: any free port)")->default_val(8080);
+  cmd->add_option("--web-root", args->server.webRoot,
+                  "Folder with the built page (default: the viewer/dist this binary was built "
+                  "with)");
+  cmd->add_option("--resolution", args->resolution, "WxH or N; must match the texture")
+      ->check(resolutionValidator());
+  cmd->add_option("--out,-o", args->out, "Where the page's Save button writes the result");
+  cmd->add_option("--alpha", args->appOptions.alpha, "Filter: screening weight")->default_val(1e4);
+  cmd->add_option("--beta", args->appOptions.beta, "Filter: global gradient scale")
+      ->default_val(1.0);
+  cmd->add_option("--sharpen-beta", args->appOptions.sharpenBeta,
+                  "Filter: gradient scale the sharpen brush paints towards")
+      ->default_val(3.0);
+  cmd->add_option("--geodesic-alpha", args->appOptions.geodesicAlpha,
+                  "Geodesic: screening weight of the diffusion step (heat time 1 / alpha)")
+      ->default_val(1e3);
+  cmd->add_option("--max-fps", args->session.maxUpdatesPerSecond,
+                  "Upper bound on solver steps (frames) per second")
+      ->default_val(60.0);
+  cmd->add_option("--max-iterations", args->session.maxIterations,
+                  "Steps after a change before the solver idles")
+      ->default_val(400);
+  cmd->add_option("--weld-tolerance", args->weldTolerance,
+                  "Weld 3-D positions closer than this (model units); 0 = exact matches only")
+      ->default_val(0.0)
+      ->check(CLI::NonNegativeNumber);
+  cmd->callback([args] { exitStatus = runGuarded([&] { runView(*args); }); });
+}
+
+}  // namespace texgrad::cli

@@ -1,0 +1,279 @@
+// Line integral convolution: streaks follow the field (autocorrelation along vs across), CG with
+// a multigrid preconditioner matches the direct solve, field files and curvature directions.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+
+#include "test_paths.h"
+#include "texgrad/apps/lic.h"
+#include "texgrad/apps/vector_field.h"
+#include "texgrad/atlas/seam_jump.h"
+#include "texgrad/core/error.h"
+#include "texgrad/fem/metric.h"
+#include "texgrad/io/procedural.h"
+
+namespace texgrad {
+namespace {
+
+/// The same 3-D vector on every face.
+FaceVectorField constantField(const TexturedMesh& mesh, const Eigen::Vector3d& vector) {
+  FaceVectorField field;
+  field.basis = FieldBasis::Extrinsic;
+  field.vectors.assign(mesh.faceCount(), vector);
+  return field;
+}
+
+/// Normalised autocorrelation of channel 0 at grid offset (dx, dy), over pairs of active texels.
+double autocorrelation(const TexelGrid& grid, const Eigen::MatrixXd& values, int dx, int dy) {
+  const double mean = values.col(0).mean();
+  double cross = 0.0, varA = 0.0, varB = 0.0;
+  for (int u = 0; u < grid.unknownCount(); ++u) {
+    const int t = grid.texelOfUnknown[u];
+    const int x = t % grid.nx + dx, y = t / grid.nx + dy;
+    if (x < 0 || y < 0 || x >= grid.nx || y >= grid.ny) continue;
+    const int w = grid.unknownOfTexel[grid.texelIndex(x, y)];
+    if (w < 0) continue;
+    const double a = values(u, 0) - mean, b = values(w, 0) - mean;
+    cross += a * b;
+    varA += a * a;
+    varB += b * b;
+  }
+  return cross / std::sqrt(varA * varB);
+}
+
+struct Correlations {
+  double alongX = 0.0, alongY = 0.0;
+};
+
+Correlations licCorrelations(const Eigen::Vector3d& direction, const LicOptions& options, int lag) {
+  TexelDomain domain(procedural::square(), 64, 64);
+  const auto field = fieldInTexelCoordinates(domain.mesh(), domain.grid(),
+                                             constantField(domain.mesh(), direction));
+  const LicResult result = lineIntegralConvolution(domain, field, options);
+  return {autocorrelation(domain.grid(), result.values, lag, 0),
+          autocorrelation(domain.grid(), result.values, 0, lag)};
+}
+
+TEST(Lic, StreaksFollowTheFieldAndRotateWithIt) {
+  // Default pipeline (diffusion + sharpening). The sharpening boosts texel-scale detail across
+  // the streaks, which makes neighbours across them anti-correlated at lag 1; from lag 2 on the
+  // across correlation is ~0 while the along correlation stays high.
+  const LicOptions options;
+  for (int lag : {1, 2, 3}) {
+    const Correlations x = licCorrelations({1, 0, 0}, options, lag);
+    const Correlations y = licCorrelations({0, 1, 0}, options, lag);
+    std::printf("lag %d  field x: rho_x %.3f rho_y %.3f  | field y: rho_x %.3f rho_y %.3f\n", lag,
+                x.alongX, x.alongY, y.alongX, y.alongY);
+    EXPECT_GT(x.alongX, 0.85) << "lag " << lag;
+    if (lag >= 2) {
+      EXPECT_LT(std::abs(x.alongY), 0.15) << "lag " << lag;
+      EXPECT_GT(x.alongX, 5.0 * std::abs(x.alongY)) << "lag " << lag;
+    }
+    // Rotating the field by 90 degrees swaps the two directions (the square is symmetric).
+    EXPECT_NEAR(y.alongY, x.alongX, 0.1) << "lag " << lag;
+    EXPECT_NEAR(y.alongX, x.alongY, 0.1) << "lag " << lag;
+  }
+}
+
+TEST(Lic, DiffusionAloneIsSmoothAlongAndRoughAcross) {
+  LicOptions options;
+  options.sharpenBeta = 1.0;  // no sharpening: the raw anisotropic diffusion
+  const Correlations x = licCorrelations({1, 0, 0}, options, 1);
+  std::printf("diffusion only: rho_x %.3f rho_y %.3f ratio %.1f\n", x.alongX, x.alongY,
+              x.alongX / std::abs(x.alongY));
+  EXPECT_GT(x.alongX, 0.9);
+  EXPECT_GT(x.alongX, 5.0 * std::abs(x.alongY));
+}
+
+double relativeDifference(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return (a - b).norm() / b.norm();
+}
+
+TEST(Lic, MultigridCgMatchesDirect) {
+  struct Case {
+    const char* name;
+    TexturedMesh mesh;
+    int width, height;
+  };
+  const Case cases[] = {{"square", procedural::square(), 64, 64},
+                        {"cylinder", procedural::cylinder(32, 16), 96, 96}};
+  for (const Case& c : cases) {
+    TexelDomain domain(c.mesh, c.width, c.height);
+    const auto field = fieldInTexelCoordinates(
+        domain.mesh(), domain.grid(),
+        c.name == std::string("square") ? constantField(domain.mesh(), {1, 1, 0})
+                                        : curvatureField(domain.mesh(), CurvatureDirection::Major));
+    LicOptions cg;
+    LicOptions direct;
+    direct.solver.kind = SolverKind::Direct;
+    const LicResult a = lineIntegralConvolution(domain, field, cg);
+    const LicResult b = lineIntegralConvolution(domain, field, direct);
+    const double difference = relativeDifference(a.values, b.values);
+    std::printf(
+        "%s: %d unknowns, CG %d + %d iterations (residual %.2e), relative difference to "
+        "direct %.2e\n",
+        c.name, domain.unknowns(), a.report.diffusion.iterations, a.report.sharpening.iterations,
+        a.report.diffusion.residuals.back(), difference);
+    EXPECT_TRUE(a.report.diffusion.converged) << c.name;
+    EXPECT_TRUE(a.report.sharpening.converged) << c.name;
+    EXPECT_LE(difference, 1e-4) << c.name;
+  }
+}
+
+TEST(Lic, LeavesTheDomainMetricUnchangedAndIsDeterministic) {
+  TexelDomain domain(procedural::square(), 32, 32);
+  const std::vector<Eigen::Matrix2d> before = domain.operators().metric();
+  const Eigen::MatrixXd massBefore = Eigen::MatrixXd(domain.operators().mass());
+  const auto field = fieldInTexelCoordinates(domain.mesh(), domain.grid(),
+                                             constantField(domain.mesh(), {1, 0, 0}));
+  const LicResult first = lineIntegralConvolution(domain, field, {});
+  const LicResult second = lineIntegralConvolution(domain, field, {});
+  for (size_t f = 0; f < before.size(); ++f) EXPECT_EQ(domain.operators().metric()[f], before[f]);
+  EXPECT_EQ(Eigen::MatrixXd(domain.operators().mass()), massBefore);
+  EXPECT_EQ(first.values, second.values);
+  LicOptions otherSeed;
+  otherSeed.seed = 2;
+  EXPECT_NE(lineIntegralConvolution(domain, field, otherSeed).values, first.values);
+}
+
+TEST(Lic, SeamContinuousOnTheCubeSphere) {
+  TexelDomain domain(procedural::cubeSphere(8), 192, 128);
+  // A field along the z axis, projected onto each face (it vanishes at the poles).
+  const auto field = fieldInTexelCoordinates(domain.mesh(), domain.grid(),
+                                             constantField(domain.mesh(), {0, 0, 1}));
+  const LicResult result = lineIntegralConvolution(domain, field, {});
+  const SeamJump jump = measureSeamJump(domain.mesh(), domain.atlas(), result.image);
+  const double contrast = LicOptions{}.contrast;  // standard deviation of the mapped output
+  std::printf("cube sphere LIC: seam jump RMS %.4f (max %.3f), output std %.2f, ratio %.3f\n",
+              jump.rms, jump.maxAbs, contrast, jump.rms / contrast);
+  EXPECT_LT(jump.rms, 0.25 * contrast);
+}
+
+TEST(Lic, AnisotropicMetricShape) {
+  TexelDomain domain(procedural::cylinder(16, 8), 64, 64);
+  const TexturedMesh& mesh = domain.mesh();
+  const TexelGrid& grid = domain.grid();
+  const std::vector<Eigen::Matrix2d>& g = domain.operators().metric();
+  const auto field = fieldInTexelCoordinates(mesh, grid, constantField(mesh, {0, 0, 1}));
+  const double epsilon = 1e-3;
+  const auto h = anisotropicMetric(mesh, grid, g, field, epsilon);
+  double area = 0.0;
+  for (size_t f = 0; f < h.size(); ++f) {
+    const int face = static_cast<int>(f);
+    area += std::sqrt(h[f].determinant()) * std::abs(fem::gridArea(mesh, grid, face));
+    // Generalised eigenvalues of h relative to g: epsilon along u, |u|^2 + epsilon across.
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix2d> eig(h[f], g[f]);
+    const double ratio = eig.eigenvalues()(1) / eig.eigenvalues()(0);
+    const double along = field[f].dot(h[f] * field[f]) / field[f].dot(g[f] * field[f]);
+    ASSERT_NEAR(along / eig.eigenvalues()(0), 1.0, 1e-9) << "u must be the short direction";
+    ASSERT_GT(ratio, 10.0) << f;
+  }
+  EXPECT_NEAR(area, 1.0, 1e-9);
+  const std::vector<Eigen::Vector2d> zero(mesh.faceCount(), Eigen::Vector2d::Zero());
+  EXPECT_THROW(anisotropicMetric(mesh, grid, g, zero, epsilon), InvalidInputError);
+}
+
+TEST(VectorField, FileRoundTripAndErrors) {
+  const TexturedMesh mesh = procedural::cube(2);
+  const auto dir = test::tempDir("vector_field");
+  FaceVectorField extrinsic;
+  extrinsic.basis = FieldBasis::Extrinsic;
+  FaceVectorField intrinsic;
+  intrinsic.basis = FieldBasis::Intrinsic;
+  for (size_t f = 0; f < mesh.faceCount(); ++f) {
+    const double s = static_cast<double>(f);
+    extrinsic.vectors.emplace_back(std::sin(s), -1.0 / (s + 3.0), 1e-300 * s);
+    intrinsic.vectors.emplace_back(std::cos(s) * 1e6, std::numbers::pi * s, 0.0);
+  }
+  writeFaceVectorField(dir / "e.vf", extrinsic);
+  writeFaceVectorField(dir / "i.vf", intrinsic);
+  EXPECT_EQ(std::filesystem::file_size(dir / "e.vf"), 4 + mesh.faceCount() * 3 * 8);
+  EXPECT_EQ(std::filesystem::file_size(dir / "i.vf"), 4 + mesh.faceCount() * 2 * 8);
+  const auto e = readFaceVectorField(dir / "e.vf", FieldBasis::Extrinsic, mesh.faceCount());
+  const auto i = readFaceVectorField(dir / "i.vf", FieldBasis::Intrinsic, mesh.faceCount());
+  EXPECT_EQ(e.vectors, extrinsic.vectors);
+  EXPECT_EQ(i.vectors, intrinsic.vectors);
+
+  const auto expectMessage = [](const auto& call, const std::string& part) {
+    try {
+      call();
+      ADD_FAILURE() << "expected InvalidInputError containing '" << part << "'";
+    } catch (const InvalidInputError& error) {
+      std::printf("message: %s\n", error.what());
+      EXPECT_NE(std::string(error.what()).find(part), std::string::npos) << error.what();
+    }
+  };
+  expectMessage([&] { readFaceVectorField(dir / "e.vf", FieldBasis::Extrinsic, 7); },
+                "but the mesh has 7 faces");
+  expectMessage([&] { readFaceVectorField(dir / "i.vf", FieldBasis::Extrinsic, mesh.faceCount()); },
+                "use --intrinsic");
+  {
+    std::ofstream out(dir / "short.vf", std::ios::binary);
+    out.write("\x05\x00", 2);
+  }
+  expectMessage([&] { readFaceVectorField(dir / "short.vf", FieldBasis::Extrinsic, 5); },
+                "too short");
+  EXPECT_THROW(readFaceVectorField(dir / "missing.vf", FieldBasis::Extrinsic, 5), IoError);
+}
+
+TEST(VectorField, IntrinsicAndExtrinsicAgreeInTexelCoordinates) {
+  TexelDomain domain(procedural::cylinder(16, 8), 64, 64);
+  const TexturedMesh& mesh = domain.mesh();
+  FaceVectorField intrinsic;
+  intrinsic.basis = FieldBasis::Intrinsic;
+  FaceVectorField extrinsic;
+  extrinsic.basis = FieldBasis::Extrinsic;
+  for (size_t f = 0; f < mesh.faceCount(); ++f) {
+    const Eigen::Vector2d ab(0.3 + 0.01 * static_cast<double>(f), -0.7);
+    const Triangle& t = mesh.triangles[f];
+    intrinsic.vectors.emplace_back(ab.x(), ab.y(), 0.0);
+    const Eigen::Vector3d tangent = ab.x() * (mesh.positions[t[1]] - mesh.positions[t[0]]) +
+                                    ab.y() * (mesh.positions[t[2]] - mesh.positions[t[0]]);
+    const Eigen::Vector3d normal = (mesh.positions[t[1]] - mesh.positions[t[0]])
+                                       .cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
+    extrinsic.vectors.push_back(tangent + 5.0 * normal);  // the normal part must be dropped
+  }
+  const auto a = fieldInTexelCoordinates(mesh, domain.grid(), intrinsic);
+  const auto b = fieldInTexelCoordinates(mesh, domain.grid(), extrinsic);
+  for (size_t f = 0; f < a.size(); ++f) EXPECT_LT((a[f] - b[f]).norm(), 1e-9 * a[f].norm()) << f;
+}
+
+TEST(VectorField, PrincipalCurvaturesOfCylinderAndSphere) {
+  const TexturedMesh cylinder = procedural::cylinder(64, 16);
+  const PrincipalCurvatures k = principalCurvatures(cylinder);
+  const double radius = 1.0 / (2.0 * std::numbers::pi);
+  double worstMajor = 0.0, worstMinor = 0.0, worstAxis = 0.0;
+  for (size_t f = 0; f < cylinder.faceCount(); ++f) {
+    worstMajor = std::max(worstMajor, std::abs(std::abs(k.kMajor[f]) * radius - 1.0));
+    worstMinor = std::max(worstMinor, std::abs(k.kMinor[f] * radius));
+    worstAxis = std::max(worstAxis, std::abs(k.dirMajor[f].z()));  // around, not along the axis
+  }
+  std::printf(
+      "cylinder: ||k_major| r - 1| <= %.3f, |k_minor r| <= %.3f, "
+      "|dir_major . axis| <= %.3f\n",
+      worstMajor, worstMinor, worstAxis);
+  EXPECT_LT(worstMajor, 0.05);
+  EXPECT_LT(worstMinor, 0.05);
+  EXPECT_LT(worstAxis, 0.05);
+
+  const TexturedMesh sphere = procedural::cubeSphere(16);
+  const PrincipalCurvatures s = principalCurvatures(sphere);
+  double meanMajor = 0.0, meanMinor = 0.0;
+  for (size_t f = 0; f < sphere.faceCount(); ++f) {
+    meanMajor += std::abs(s.kMajor[f]);
+    meanMinor += std::abs(s.kMinor[f]);
+  }
+  meanMajor /= static_cast<double>(sphere.faceCount());
+  meanMinor /= static_cast<double>(sphere.faceCount());
+  std::printf("unit sphere: mean |k_major| %.3f, mean |k_minor| %.3f\n", meanMajor, meanMinor);
+  EXPECT_NEAR(meanMajor, 1.0, 0.05);
+  EXPECT_NEAR(meanMinor, 1.0, 0.05);
+}
+
+}  // namespace
+}  // namespace texgrad
