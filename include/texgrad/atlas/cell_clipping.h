@@ -43,7 +43,7 @@ struct PieceVertex {
   /// Bit e set if the vertex lies on face edge e (corners lie on two edges).
   uint8_t edgeMask() const {
     if (corner >= 0) return static_cast<uint8_t>((1u << corner) | (1u << ((corner + 2) % 3)));
-    return edge >= 0 ? static_cast<uint8_t>(1u << edge) : 0;
+    return edge >= 0 ? static_cast<uint8_t>(1u << edge) : uint8_t{0};
   }
 };
 
