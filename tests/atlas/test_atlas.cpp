@@ -129,6 +129,18 @@ TEST_P(SharedAtlas, MatchesIndexCounts) {
   expectConsistentSeams(m, atlas);
 }
 
+TEST(SharedAtlasGltf, ObjAndGltfVersionsAgree) {
+  for (const char* name : {"BoomBox", "WaterBottle", "Lantern", "Avocado", "Suzanne"}) {
+    const std::filesystem::path dir = test::sharedData() / name;
+    const TexturedMesh obj = readMesh(dir / "obj" / (std::string(name) + ".obj"));
+    const TexturedMesh gltf = readMesh(dir / "glTF" / (std::string(name) + ".gltf"));
+    const Atlas a = buildAtlas(obj), b = buildAtlas(gltf);
+    EXPECT_EQ(a.charts.size(), b.charts.size()) << name;
+    EXPECT_EQ(a.seams.size(), b.seams.size()) << name;
+    EXPECT_EQ(a.openBoundary.size(), b.openBoundary.size()) << name;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(AllMeshes, SharedAtlas, ::testing::ValuesIn(test::sharedMeshes()),
                          test::sharedMeshName);
 

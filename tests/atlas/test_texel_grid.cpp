@@ -2,6 +2,9 @@
 // and structural invariants on procedural and shared meshes.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <numbers>
+
 #include "shared_meshes.h"
 #include "texgrad/atlas/atlas.h"
 #include "texgrad/atlas/atlas_report.h"
@@ -182,6 +185,112 @@ TEST_P(SharedGrid, EveryUvTriangleCornerTexelIsActive) {
 
 INSTANTIATE_TEST_SUITE_P(AllMeshes, SharedGrid, ::testing::ValuesIn(test::sharedMeshes()),
                          test::sharedMeshName);
+
+}  // namespace
+}  // namespace texgrad
+
+namespace texgrad {
+namespace {
+
+/// Independent oracle for a convex UV polygon (grid coordinates): a texel is active iff its
+/// footprint [x-1, x+1] x [y-1, y+1] overlaps the polygon with positive area (separating axes),
+/// interior iff the footprint lies inside it.
+struct ConvexOracle {
+  std::vector<Eigen::Vector2d> poly;  // counter-clockwise
+
+  static std::pair<double, double> project(const std::vector<Eigen::Vector2d>& pts,
+                                           const Eigen::Vector2d& axis) {
+    double lo = 1e300, hi = -1e300;
+    for (const auto& p : pts) lo = std::min(lo, p.dot(axis)), hi = std::max(hi, p.dot(axis));
+    return {lo, hi};
+  }
+  bool overlaps(const std::vector<Eigen::Vector2d>& box) const {
+    std::vector<Eigen::Vector2d> axes{{1, 0}, {0, 1}};
+    for (size_t k = 0; k < poly.size(); ++k) {
+      const Eigen::Vector2d e = poly[(k + 1) % poly.size()] - poly[k];
+      axes.emplace_back(-e.y(), e.x());
+    }
+    for (const auto& a : axes) {
+      const auto [p0, p1] = project(poly, a);
+      const auto [b0, b1] = project(box, a);
+      if (std::min(p1, b1) - std::max(p0, b0) <= 1e-12 * a.norm()) return false;
+    }
+    return true;
+  }
+  bool contains(const Eigen::Vector2d& q) const {
+    for (size_t k = 0; k < poly.size(); ++k) {
+      const Eigen::Vector2d e = poly[(k + 1) % poly.size()] - poly[k], d = q - poly[k];
+      if (e.x() * d.y() - e.y() * d.x() < -1e-12) return false;
+    }
+    return true;
+  }
+};
+
+TEST(TexelGrid, SquareRotatedThirtyDegreesMatchesTheOracle) {
+  const double c = std::cos(std::numbers::pi / 6), s = std::sin(std::numbers::pi / 6);
+  const Eigen::Vector2d centre(0.5, 0.5);
+  std::vector<Eigen::Vector2d> uv;
+  for (const auto& [x, y] : {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}})
+    uv.push_back(centre + 0.25 * Eigen::Vector2d(c * x - s * y, s * x + c * y));
+  TexturedMesh m;
+  for (const auto& p : uv) {
+    m.positions.emplace_back(p.x(), p.y(), 0.0);
+    m.uvs.push_back(p);
+  }
+  m.triangles = {{0, 1, 2}, {0, 2, 3}};
+  m.uvTriangles = m.triangles;
+  const int n = 64;
+  const TexelGrid g = buildTexelGrid(m, buildAtlas(m), n, n);
+  ConvexOracle oracle;
+  for (const auto& p : uv) oracle.poly.push_back(p * n - Eigen::Vector2d(0.5, 0.5));
+  int active = 0, interior = 0, checked = 0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector2d q(i, j);
+      const std::vector<Eigen::Vector2d> box{q + Eigen::Vector2d(-1, -1), q + Eigen::Vector2d(1, -1),
+                                             q + Eigen::Vector2d(1, 1), q + Eigen::Vector2d(-1, 1)};
+      const bool isActive = oracle.overlaps(box);
+      bool isInterior = isActive;
+      for (const auto& corner : box) isInterior &= oracle.contains(corner);
+      active += isActive;
+      interior += isInterior;
+      const int x = i - g.x0, y = j - g.y0;
+      const bool inGrid = x >= 0 && y >= 0 && x < g.nx && y < g.ny;
+      const TexelClass k = inGrid ? g.texelClass[g.texelIndex(x, y)] : TexelClass::Inactive;
+      ASSERT_EQ(k != TexelClass::Inactive, isActive) << i << "," << j;
+      ASSERT_EQ(k == TexelClass::Interior, isInterior) << i << "," << j;
+      ++checked;
+    }
+  EXPECT_EQ(g.unknownCount(), active);
+  EXPECT_GT(interior, 0);
+}
+
+TEST(TexelGrid, TwoChartSquareCountsMatchEachChartAlone) {
+  // Charts far apart in UV: each texel belongs to exactly one chart, and the counts are the sums
+  // of the counts of each chart's triangles taken on their own.
+  const TexturedMesh both = procedural::twoChartSquare(4);
+  const Atlas atlas = buildAtlas(both);
+  ASSERT_EQ(atlas.charts.size(), 2u);
+  const TexelGrid g = buildTexelGrid(both, atlas, 128, 128);
+  int sum = 0, interiorSum = 0;
+  for (const Chart& chart : atlas.charts) {
+    TexturedMesh one = both;
+    one.triangles.clear();
+    one.uvTriangles.clear();
+    for (int32_t f : chart.faces) {
+      one.triangles.push_back(both.triangles[f]);
+      one.uvTriangles.push_back(both.uvTriangles[f]);
+    }
+    const TexelGrid alone = buildTexelGrid(one, buildAtlas(one), 128, 128);
+    sum += alone.unknownCount();
+    for (TexelClass k : alone.texelClass) interiorSum += k == TexelClass::Interior;
+  }
+  int interior = 0;
+  for (TexelClass k : g.texelClass) interior += k == TexelClass::Interior;
+  EXPECT_EQ(g.unknownCount(), sum);
+  EXPECT_EQ(interior, interiorSum);
+  EXPECT_TRUE(g.multiChartTexels.empty());
+}
 
 }  // namespace
 }  // namespace texgrad
