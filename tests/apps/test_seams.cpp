@@ -85,7 +85,11 @@ TEST_P(SharedSeams, JumpFallsAtLeastFiveFoldOnTheRealTexture) {
   const double before = measureSeamJump(domain.mesh(), domain.atlas(), texture).rms;
   const double after = measureSeamJump(domain.mesh(), domain.atlas(), r.image).rms;
   std::cout << "[ seams ] " << s.name << " seam jump " << before << " -> " << after << "\n";
-  if (domain.atlas().seams.empty()) GTEST_SKIP() << s.name << " has no seams";
+  if (domain.atlas().seams.empty()) {  // Suzanne: nothing to measure, nothing may change
+    EXPECT_EQ(before, 0.0);
+    EXPECT_EQ(after, 0.0);
+    return;
+  }
   EXPECT_LE(after, before / 5.0);
 }
 
