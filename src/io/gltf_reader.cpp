@@ -14,11 +14,14 @@
 
 #include "texgrad/core/error.h"
 #include "texgrad/io/mesh_reader.h"
+#include "gltf_common.h"
 
 namespace texgrad {
 namespace {
 
-using ImageBytes = std::map<int, std::vector<unsigned char>>;
+using gltf::ImageBytes;
+using gltf::percentDecode;
+using gltf::sceneRoots;
 
 /// Image loader for tinygltf: keeps the encoded bytes of embedded images (bufferView or data
 /// URI) and decodes nothing; external images are only referenced by path.
@@ -27,29 +30,6 @@ bool captureImage(tinygltf::Image* image, const int index, std::string*, std::st
   if (!image->uri.empty() || bytes == nullptr || size <= 0) return true;
   (*static_cast<ImageBytes*>(user))[index].assign(bytes, bytes + size);
   return true;
-}
-
-bool isBinaryGltf(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::array<char, 4> magic{};
-  in.read(magic.data(), magic.size());
-  return in && std::string_view(magic.data(), magic.size()) == "glTF";
-}
-
-/// Decodes %XX escapes in a relative URI (glTF image URIs are URI-encoded).
-std::string percentDecode(const std::string& uri) {
-  std::string out;
-  for (size_t i = 0; i < uri.size(); ++i) {
-    if (uri[i] == '%' && i + 2 < uri.size() &&
-        std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
-        std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
-      out.push_back(static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16)));
-      i += 2;
-    } else {
-      out.push_back(uri[i]);
-    }
-  }
-  return out;
 }
 
 /// Typed, bounds-checked view of an accessor's elements.
@@ -272,24 +252,6 @@ class SceneCollector {
 };
 
 /// Root nodes to draw: the default scene, else scene 0, else every node without a parent.
-std::vector<int> sceneRoots(const tinygltf::Model& model) {
-  if (!model.scenes.empty()) {
-    const int scene =
-        model.defaultScene >= 0 && static_cast<size_t>(model.defaultScene) < model.scenes.size()
-            ? model.defaultScene
-            : 0;
-    return model.scenes[static_cast<size_t>(scene)].nodes;
-  }
-  std::vector<bool> isChild(model.nodes.size(), false);
-  for (const auto& node : model.nodes)
-    for (int c : node.children)
-      if (c >= 0 && static_cast<size_t>(c) < isChild.size()) isChild[static_cast<size_t>(c)] = true;
-  std::vector<int> roots;
-  for (size_t i = 0; i < model.nodes.size(); ++i)
-    if (!isChild[i]) roots.push_back(static_cast<int>(i));
-  return roots;
-}
-
 void addTexture(TexturedMesh& mesh, const tinygltf::Model& model, const ImageBytes& embedded,
                 const std::filesystem::path& folder, const char* slot, int textureIndex) {
   if (textureIndex < 0 || static_cast<size_t>(textureIndex) >= model.textures.size() ||
@@ -311,33 +273,13 @@ void addTexture(TexturedMesh& mesh, const tinygltf::Model& model, const ImageByt
   mesh.textures.push_back(std::move(ref));
 }
 
-tinygltf::Model loadModel(const std::filesystem::path& path, ImageBytes& embedded) {
-  tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(captureImage, &embedded);
-  tinygltf::Model model;
-  std::string error, warning;
-  const bool ok = isBinaryGltf(path)
-                      ? loader.LoadBinaryFromFile(&model, &error, &warning, path.string())
-                      : loader.LoadASCIIFromFile(&model, &error, &warning, path.string());
-  if (!ok) {
-    while (!error.empty() && error.back() == '\n') error.pop_back();
-    if (error.find("File not found") != std::string::npos ||
-        error.find("File read error") != std::string::npos)
-      throw IoError("cannot load " + path.string() + ": " + error +
-                    "; keep its .bin and image files next to it");
-    throw InvalidInputError(path.string() + ": not a valid glTF 2.0 file (" + error +
-                            "); check it with the Khronos glTF validator");
-  }
-  return model;
-}
-
 }  // namespace
 
 TexturedMesh readGltf(const std::filesystem::path& path) {
   requireReadableFile(path);
   const std::string file = path.string();
   ImageBytes embedded;
-  const tinygltf::Model model = loadModel(path, embedded);
+  const tinygltf::Model model = gltf::loadModel(path, captureImage, embedded);
 
   SceneCollector collector(model, file);
   for (int root : sceneRoots(model)) collector.visit(root, Eigen::Matrix4d::Identity());

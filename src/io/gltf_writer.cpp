@@ -40,6 +40,7 @@
 #include "texgrad/core/error.h"
 #include "texgrad/io/atomic_file.h"
 #include "texgrad/io/mesh_reader.h"
+#include "gltf_common.h"
 
 namespace texgrad {
 namespace {
@@ -47,7 +48,9 @@ namespace {
 namespace fs = std::filesystem;
 
 using Bytes = std::vector<unsigned char>;
-using ImageBytes = std::map<int, Bytes>;
+using gltf::ImageBytes;
+using gltf::percentDecode;
+using gltf::sceneRoots;
 
 constexpr std::array<std::string_view, 5> kSlots = {"baseColor", "normal", "emissive",
                                                     "metallicRoughness", "occlusion"};
@@ -65,33 +68,10 @@ bool captureImage(tinygltf::Image* image, const int index, std::string*, std::st
   return true;
 }
 
-bool isBinaryGltf(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::array<char, 4> magic{};
-  in.read(magic.data(), magic.size());
-  return in && std::string_view(magic.data(), magic.size()) == "glTF";
-}
-
 std::string lowercase(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return text;
-}
-
-/// Decodes %XX escapes in a relative URI (glTF image URIs are URI-encoded).
-std::string percentDecode(const std::string& uri) {
-  std::string out;
-  for (size_t i = 0; i < uri.size(); ++i) {
-    if (uri[i] == '%' && i + 2 < uri.size() &&
-        std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
-        std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
-      out.push_back(static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16)));
-      i += 2;
-    } else {
-      out.push_back(uri[i]);
-    }
-  }
-  return out;
 }
 
 /// Escapes a relative path for use as a URI reference (RFC 3986: unreserved characters, '/' and
@@ -131,26 +111,6 @@ std::string mimeTypeOf(const Bytes& bytes) {
   return "";
 }
 
-tinygltf::Model loadModel(const fs::path& path, ImageBytes& images) {
-  tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(captureImage, &images);
-  tinygltf::Model model;
-  std::string error, warning;
-  const bool ok = isBinaryGltf(path)
-                      ? loader.LoadBinaryFromFile(&model, &error, &warning, path.string())
-                      : loader.LoadASCIIFromFile(&model, &error, &warning, path.string());
-  if (!ok) {
-    while (!error.empty() && error.back() == '\n') error.pop_back();
-    if (error.find("File not found") != std::string::npos ||
-        error.find("File read error") != std::string::npos)
-      throw IoError("cannot load " + path.string() + ": " + error +
-                    "; keep its .bin and image files next to it");
-    throw InvalidInputError(path.string() + ": not a valid glTF 2.0 file (" + error +
-                            "); check it with the Khronos glTF validator");
-  }
-  return model;
-}
-
 /// The texture index field of `slot` in a (const or mutable) material.
 template <typename Material>
 auto& slotIndex(Material& m, std::string_view slot) {
@@ -184,24 +144,6 @@ bool mentionsIndex(const tinygltf::ExtensionMap& extensions, const std::string& 
 
 /// Root nodes to draw: the default scene, else scene 0, else every node without a parent (the
 /// reader's rule).
-std::vector<int> sceneRoots(const tinygltf::Model& model) {
-  if (!model.scenes.empty()) {
-    const int scene =
-        model.defaultScene >= 0 && static_cast<size_t>(model.defaultScene) < model.scenes.size()
-            ? model.defaultScene
-            : 0;
-    return model.scenes[static_cast<size_t>(scene)].nodes;
-  }
-  std::vector<bool> isChild(model.nodes.size(), false);
-  for (const auto& node : model.nodes)
-    for (int c : node.children)
-      if (c >= 0 && static_cast<size_t>(c) < isChild.size()) isChild[static_cast<size_t>(c)] = true;
-  std::vector<int> roots;
-  for (size_t i = 0; i < model.nodes.size(); ++i)
-    if (!isChild[i]) roots.push_back(static_cast<int>(i));
-  return roots;
-}
-
 /// Materials in the order readGltf consults them (primitives of the drawn scene, depth first),
 /// followed by every material index as a fallback.
 std::vector<int> materialOrder(const tinygltf::Model& model) {
@@ -448,7 +390,7 @@ void writeGltfWithTexture(const fs::path& source, const fs::path& target, const 
 
   requireReadableFile(source);
   ImageBytes sourceImages;
-  tinygltf::Model model = loadModel(source, sourceImages);
+  tinygltf::Model model = gltf::loadModel(source, captureImage, sourceImages);
 
   const int texture = findSlotTexture(model, slot);
   if (texture < 0)
