@@ -130,6 +130,14 @@ int runGuarded(const std::function<void()>& body) {
 
 void printJson(const nlohmann::json& document) { std::cout << document.dump(2) << "\n"; }
 
+void addWeldToleranceOption(CLI::App* cmd, double& tolerance) {
+  cmd->add_option("--weld-tolerance", tolerance,
+                  "Weld 3-D positions closer than this (model units) to recover seams; "
+                  "0 = exact matches only")
+      ->default_val(0.0)
+      ->check(CLI::NonNegativeNumber);
+}
+
 SolverSettings SolverArgs::settings() const {
   SolverSettings s;
   s.kind = parseSolverKind(kind);

@@ -42,6 +42,9 @@ int runGuarded(const std::function<void()>& body);
 /// Prints a JSON document to stdout (pretty, newline-terminated).
 void printJson(const nlohmann::json& document);
 
+/// Registers --weld-tolerance (model units; 0 = weld exactly coincident positions only).
+void addWeldToleranceOption(CLI::App* cmd, double& tolerance);
+
 /// Solver flags shared by every command that solves (--solver, --cycles, --levels, ...).
 struct SolverArgs {
   std::string kind = "multigrid";

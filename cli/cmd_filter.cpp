@@ -91,10 +91,7 @@ void addFilterCommand(CLI::App& app) {
       ->default_val("baseColor");
   cmd->add_option("--bit-depth", args->bitDepth,
                   "8, 16, half or float (default: the input texture's)");
-  cmd->add_option("--weld-tolerance", args->weldTolerance,
-                  "Weld 3-D positions closer than this (model units); 0 = exact matches only")
-      ->default_val(0.0)
-      ->check(CLI::NonNegativeNumber);
+  addWeldToleranceOption(cmd, args->weldTolerance);
   addSolverOptions(cmd, args->solver, FilterOptions().solver.cycles);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runFilter(*args); }); });

@@ -215,10 +215,7 @@ void addGeodesicCommand(CLI::App& app) {
                   "neumann (paper; one system less)")
       ->default_val("average")
       ->check(CLI::IsMember({"average", "neumann"}));
-  cmd->add_option("--weld-tolerance", args->weldTolerance,
-                  "Weld 3-D positions closer than this (model units); 0 = exact matches only")
-      ->default_val(0.0)
-      ->check(CLI::NonNegativeNumber);
+  addWeldToleranceOption(cmd, args->weldTolerance);
   addSolverOptions(cmd, args->solver, 6);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runGeodesic(*args); }); });

@@ -132,11 +132,7 @@ void addInfoCommand(CLI::App& app) {
   cmd->add_option("--texture,-t", args->texture,
                   "Texture whose size sets the resolution when --resolution is not given");
   cmd->add_flag("--json", args->json, "Print the report as JSON on stdout (default: text)");
-  cmd->add_option("--weld-tolerance", args->weldTolerance,
-                  "Weld 3-D positions closer than this (model units) to recover seams; "
-                  "0 = exact matches only")
-      ->default_val(0.0)
-      ->check(CLI::NonNegativeNumber);
+  addWeldToleranceOption(cmd, args->weldTolerance);
   cmd->add_option("--max-ids", args->maxIds, "How many element ids to list per problem (text)")
       ->default_val(20)
       ->check(CLI::NonNegativeNumber);

@@ -139,10 +139,7 @@ void addLicCommand(CLI::App& app) {
   cmd->add_flag("--color,--colour", args->colour,
                 "Colour noise (random hues) instead of grey noise");
   cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: 8)");
-  cmd->add_option("--weld-tolerance", args->weldTolerance,
-                  "Weld 3-D positions closer than this (model units); 0 = exact matches only")
-      ->default_val(0.0)
-      ->check(CLI::NonNegativeNumber);
+  addWeldToleranceOption(cmd, args->weldTolerance);
   addSolverOptions(cmd, args->solver, defaultLicSolver().cycles);
   // Plain V-cycles stall on the anisotropic metric (paper Sec. 8): default to multigrid-CG.
   args->solver.kind = toString(defaultLicSolver().kind);

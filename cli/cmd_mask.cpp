@@ -49,10 +49,7 @@ void addMaskCommand(CLI::App& app) {
       ->default_val("active")
       ->check(CLI::IsMember({"active", "boundary", "interior", "chart", "coverage"}));
   cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default 8)");
-  cmd->add_option("--weld-tolerance", args->weldTolerance,
-                  "Weld 3-D positions closer than this (model units); 0 = exact matches only")
-      ->default_val(0.0)
-      ->check(CLI::NonNegativeNumber);
+  addWeldToleranceOption(cmd, args->weldTolerance);
   cmd->callback([args] { exitStatus = runGuarded([&] { runMask(*args); }); });
 }
 

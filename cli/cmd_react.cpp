@@ -104,10 +104,7 @@ void addReactCommand(CLI::App& app) {
       ->default_val("512")
       ->check(resolutionValidator());
   cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: 8)");
-  cmd->add_option("--weld-tolerance", args->weldTolerance,
-                  "Weld 3-D positions closer than this (model units); 0 = exact matches only")
-      ->default_val(0.0)
-      ->check(CLI::NonNegativeNumber);
+  addWeldToleranceOption(cmd, args->weldTolerance);
   addSolverOptions(cmd, args->solver, defaultReactionSolver().cycles);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runReact(*args); }); });

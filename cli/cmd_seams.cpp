@@ -60,10 +60,7 @@ void addSeamsCommand(CLI::App& app) {
   cmd->add_option("--texture-slot", args->slot, "Texture of the mesh to use and replace")
       ->default_val("baseColor");
   cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: the input's)");
-  cmd->add_option("--weld-tolerance", args->weldTolerance,
-                  "Weld 3-D positions closer than this (model units); 0 = exact matches only")
-      ->default_val(0.0)
-      ->check(CLI::NonNegativeNumber);
+  addWeldToleranceOption(cmd, args->weldTolerance);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runSeams(*args); }); });
 }

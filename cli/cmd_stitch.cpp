@@ -113,10 +113,7 @@ void addStitchCommand(CLI::App& app) {
       ->default_val(1e2)
       ->check(CLI::PositiveNumber);
   cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: the input's)");
-  cmd->add_option("--weld-tolerance", args->weldTolerance,
-                  "Weld 3-D positions closer than this (model units); 0 = exact matches only")
-      ->default_val(0.0)
-      ->check(CLI::NonNegativeNumber);
+  addWeldToleranceOption(cmd, args->weldTolerance);
   addSolverOptions(cmd, args->solver, 10);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runStitch(*args); }); });

@@ -90,10 +90,7 @@ void addViewCommand(CLI::App& app) {
   cmd->add_option("--max-iterations", args->session.maxIterations,
                   "Steps after a change before the solver idles")
       ->default_val(400);
-  cmd->add_option("--weld-tolerance", args->weldTolerance,
-                  "Weld 3-D positions closer than this (model units); 0 = exact matches only")
-      ->default_val(0.0)
-      ->check(CLI::NonNegativeNumber);
+  addWeldToleranceOption(cmd, args->weldTolerance);
   cmd->callback([args] { exitStatus = runGuarded([&] { runView(*args); }); });
 }
 
