@@ -41,6 +41,17 @@ std::vector<std::string> expandPattern(const std::string& pattern, const std::st
   return files;
 }
 
+/// Per-source gains as nested JSON arrays (one array of channel gains per source).
+nlohmann::json gainsJson(const Eigen::MatrixXd& gains) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (Eigen::Index s = 0; s < gains.rows(); ++s) {
+    nlohmann::json row = nlohmann::json::array();
+    for (Eigen::Index c = 0; c < gains.cols(); ++c) row.push_back(gains(s, c));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
 void runStitch(StitchArgs args) {
   StageTimer timer;
   args.options.solver = args.solver.settings();
@@ -81,6 +92,7 @@ void runStitch(StitchArgs args) {
                {"texels", domain.unknowns()},
                {"sources", result.sources},
                {"locked_texels", result.lockedTexels},
+               {"source_gains", gainsJson(result.sourceGains)},
                {"solve", toJson(result.report)},
                {"stages", timer.json()},
                {"output", args.out}});
@@ -112,6 +124,9 @@ void addStitchCommand(CLI::App& app) {
                   "Screening weight: larger keeps the sources' absolute colours (paper 1e2)")
       ->default_val(1e2)
       ->check(CLI::PositiveNumber);
+  cmd->add_flag("!--no-gain-compensation", args->options.compensateGains,
+               "Keep each source's exposure and colour cast (by default one gain per source and "
+               "channel, estimated where sources meet, is divided out before stitching)");
   cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: the input's)");
   addWeldToleranceOption(cmd, args->weldTolerance);
   addSolverOptions(cmd, args->solver, 10);

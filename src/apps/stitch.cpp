@@ -10,6 +10,7 @@
 #include <cmath>
 #include <map>
 
+#include "texgrad/apps/gain_compensation.h"
 #include "texgrad/apps/texel_signal.h"
 #include "texgrad/core/error.h"
 
@@ -29,10 +30,15 @@ Eigen::VectorXd channelZero(const TexelGrid& grid, const Image& image) {
   return gatherTexels(grid, image).col(0);
 }
 
-/// Solves (alpha W M W + S + lock) x = alpha W M W xbar + div + lock xbar.
+/// Colour channels that gain compensation touches (not alpha).
+int colourChannels(Eigen::Index channels) { return static_cast<int>(std::min<Eigen::Index>(channels, 3)); }
+
+/// Solves (alpha W M W + S + lock) x = alpha W M W xbar + div + lock input; locked texels end
+/// exactly at `input` (the uncompensated source values).
 StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
-                         const Eigen::VectorXd& known, const Eigen::MatrixXd& divergence,
-                         const Image& like, const StitchOptions& options) {
+                         const Eigen::MatrixXd& input, const Eigen::VectorXd& known,
+                         const Eigen::MatrixXd& divergence, const Image& like,
+                         const StitchOptions& options) {
   const TexelGrid& grid = domain.grid();
   const TexelOperators& ops = domain.operators();
   const auto n = static_cast<Eigen::Index>(grid.unknownCount());
@@ -56,7 +62,7 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
       if (!(lockValues[u] > 0.5)) continue;
       locked[static_cast<size_t>(u)] = 1;
       a.coeffRef(u, u) += weight;
-      rhs.row(u) += weight * xbar.row(u);
+      rhs.row(u) += weight * input.row(u);
       ++result.lockedTexels;
     }
   }
@@ -66,7 +72,7 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
   Eigen::MatrixXd x = xbar;
   result.report = solver.solve(rhs, x);
   for (Eigen::Index u = 0; u < n; ++u)
-    if (locked[static_cast<size_t>(u)]) x.row(u) = xbar.row(u);  // exactly the input
+    if (locked[static_cast<size_t>(u)]) x.row(u) = input.row(u);  // exactly the input
   result.image = like;
   scatterTexels(grid, x, result.image);
   return result;
@@ -133,7 +139,20 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
   checkSize(grid, segments, "the segment mask");
   int sources = 0;
   const std::vector<int32_t> labels = sourceLabels(grid, segments, sources);
-  const Eigen::MatrixXd xbar = gatherTexels(grid, composite);
+  const Eigen::MatrixXd input = gatherTexels(grid, composite);
+  Eigen::MatrixXd xbar = input;
+  const int channels = colourChannels(xbar.cols());
+  Eigen::MatrixXd gains = Eigen::MatrixXd::Ones(sources, channels);
+  if (options.compensateGains && sources > 1) {
+    Eigen::VectorXd texelsPerSource = Eigen::VectorXd::Zero(sources);
+    for (int32_t label : labels)
+      if (label > 0) texelsPerSource[label - 1] += 1.0;
+    const auto links = compositeGainLinks(domain.operators().stiffness(), labels, xbar, channels);
+    gains = solveLogGains(sources, channels, links, texelsPerSource).array().exp();
+    for (Eigen::Index u = 0; u < xbar.rows(); ++u)
+      if (labels[u] > 0)
+        xbar.row(u).head(channels).array() /= gains.row(labels[u] - 1).array();
+  }
   Eigen::VectorXd known(xbar.rows());
   for (Eigen::Index u = 0; u < xbar.rows(); ++u) known[u] = labels[u] > 0 ? 1.0 : 0.0;
   // Keep the gradient on cells whose texels all come from one source; zero elsewhere.
@@ -146,8 +165,9 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
                        beta[cell] = same ? 1.0 : 0.0;
                      });
   const Eigen::MatrixXd divergence = domain.operators().modulatedStiffness(beta) * xbar;
-  StitchResult result = solveStitch(domain, xbar, known, divergence, composite, options);
+  StitchResult result = solveStitch(domain, xbar, input, known, divergence, composite, options);
   result.sources = sources;
+  result.sourceGains = gains;
   return result;
 }
 
@@ -175,11 +195,36 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
                               " channels, partial 0 has " + std::to_string(channels));
     values.push_back(gatherTexels(grid, partials[i]));
     confidence.push_back(channelZero(grid, confidences[i]).cwiseMax(0.0).cwiseMin(1.0));
-    for (Eigen::Index u = 0; u < n; ++u) {
-      sum.row(u) += confidence.back()[u] * values.back().row(u);
-      weight[u] += confidence.back()[u];
-    }
   }
+  // The lock keeps the confidence-weighted mean of the partials as given.
+  const auto blend = [&](const std::vector<Eigen::MatrixXd>& v) {
+    sum.setZero();
+    weight.setZero();
+    for (size_t i = 0; i < v.size(); ++i)
+      for (Eigen::Index u = 0; u < n; ++u) {
+        sum.row(u) += confidence[i][u] * v[i].row(u);
+        weight[u] += confidence[i][u];
+      }
+    Eigen::MatrixXd mean = Eigen::MatrixXd::Zero(n, channels);
+    for (Eigen::Index u = 0; u < n; ++u)
+      if (weight[u] > 0.0) mean.row(u) = sum.row(u) / weight[u];
+    return mean;
+  };
+  const Eigen::MatrixXd input = blend(values);
+  const int colour = colourChannels(channels);
+  const int sources = static_cast<int>(partials.size());
+  Eigen::MatrixXd gains = Eigen::MatrixXd::Ones(sources, colour);
+  if (options.compensateGains && sources > 1) {
+    Eigen::VectorXd texelsPerSource = Eigen::VectorXd::Zero(sources);
+    for (int i = 0; i < sources; ++i)
+      texelsPerSource[i] = static_cast<double>((confidence[static_cast<size_t>(i)].array() > 0.0).count());
+    gains = solveLogGains(sources, colour, partialGainLinks(values, confidence, colour),
+                          texelsPerSource).array().exp();
+    for (int i = 0; i < sources; ++i)
+      for (Eigen::Index u = 0; u < n; ++u)
+        values[static_cast<size_t>(i)].row(u).head(colour).array() /= gains.row(i).array();
+  }
+  const Eigen::MatrixXd xbar = blend(values);
   // A partial's weight on a cell = its smallest confidence over the cell's texels; the target
   // gradient is the weighted mean of the partials' gradients, zero where none sees the cell.
   const size_t cells = grid.cellCoverage.size();
@@ -200,15 +245,11 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
   for (size_t i = 0; i < partials.size(); ++i)
     divergence += domain.operators().modulatedStiffness(beta[i]) * values[i];
   Eigen::VectorXd known(n);
-  Eigen::MatrixXd xbar(n, channels);
-  for (Eigen::Index u = 0; u < n; ++u) {
-    known[u] = weight[u] > 0.0 ? 1.0 : 0.0;
-    xbar.row(u) = weight[u] > 0.0 ? Eigen::RowVectorXd(sum.row(u) / weight[u])
-                                  : Eigen::RowVectorXd::Zero(channels);
-  }
+  for (Eigen::Index u = 0; u < n; ++u) known[u] = weight[u] > 0.0 ? 1.0 : 0.0;
   Image like = partials[0];
-  StitchResult result = solveStitch(domain, xbar, known, divergence, like, options);
-  result.sources = static_cast<int>(partials.size());
+  StitchResult result = solveStitch(domain, xbar, input, known, divergence, like, options);
+  result.sources = sources;
+  result.sourceGains = gains;
   return result;
 }
 

@@ -2,10 +2,14 @@
 // exactly, and leaves a single-source texture unchanged.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <map>
 
 #include "app_fixtures.h"
 #include "shared_meshes.h"
+#include "texgrad/apps/gain_compensation.h"
 #include "texgrad/apps/stitch.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/image_io.h"
@@ -41,6 +45,7 @@ TEST(Stitch, RemovesAnOffsetBetweenTwoSources) {
   StitchOptions o;
   o.solver.kind = SolverKind::Direct;
   o.alpha = 1e-2;  // weak screening: the offset spreads over the whole (connected) sphere
+  o.compensateGains = false;  // the paper's stitch: an additive offset, no gain model
   const StitchResult r = stitchComposite(domain, composite, segments, o);
   EXPECT_EQ(r.sources, 2);
   // The result equals base + constant up to small error: its difference to base is flat.
@@ -52,6 +57,74 @@ TEST(Stitch, RemovesAnOffsetBetweenTwoSources) {
       gatherTexels(domain.grid(), composite) - gatherTexels(domain.grid(), base);
   const double inputSpread = std::sqrt((input.array() - input.mean()).square().mean());
   EXPECT_LT(spread, 0.2 * inputSpread) << spread << " vs " << inputSpread;
+}
+
+TEST(GainCompensation, RecoversLogGainsUpToTheWeightedMean) {
+  // Sources 0 - 1 - 2 in a chain with exact log ratios; source 3 meets nobody.
+  const Eigen::RowVector2d l0(0.2, -0.1), l1(-0.3, 0.4), l2(0.5, 0.0);
+  std::vector<GainLink> links(2);
+  links[0] = {0, 1, l0 - l1, 50.0};
+  links[1] = {1, 2, l1 - l2, 20.0};
+  const Eigen::Vector4d texels(100.0, 300.0, 50.0, 10.0);
+  const Eigen::MatrixXd l = solveLogGains(4, 2, links, texels);
+  for (int c = 0; c < 2; ++c) {
+    EXPECT_NEAR(l(0, c) - l(1, c), l0[c] - l1[c], 1e-4);
+    EXPECT_NEAR(l(1, c) - l(2, c), l1[c] - l2[c], 1e-4);
+    EXPECT_NEAR(texels.head(3).dot(l.col(c).head(3)), 0.0, 1e-3);  // brightness kept
+    EXPECT_NEAR(l(3, c), 0.0, 1e-9);
+  }
+}
+
+TEST(GainCompensation, StitchingRemovesAPerChannelGainBetweenSources) {
+  // Right half of the image from a camera with per-channel gains g; left half from the truth.
+  // One chart, so that the image-space test texture is continuous on the surface.
+  const TexelDomain domain(procedural::square(), 128, 128);
+  Image base(128, 128, 3);  // smooth, like a photograph at texel scale
+  for (int j = 0; j < 128; ++j)
+    for (int i = 0; i < 128; ++i)
+      for (int c = 0; c < 3; ++c)
+        base.at(i, j, c) = 0.4f + 0.15f * std::sin(0.11f * i + c) * std::cos(0.07f * j - c);
+  const std::array<float, 3> g{1.6f, 1.3f, 0.8f};
+  Image composite = base, segments(128, 128, 1);
+  for (int j = 0; j < 128; ++j)
+    for (int i = 64; i < 128; ++i) {
+      segments.at(i, j) = 1.0f;
+      for (int c = 0; c < 3; ++c) composite.at(i, j, c) *= g[c];
+    }
+  for (int j = 0; j < 128; ++j)
+    for (int i = 0; i < 64; ++i) segments.at(i, j) = 0.5f;
+  StitchOptions o;
+  o.solver.kind = SolverKind::Direct;
+  const StitchResult r = stitchComposite(domain, composite, segments, o);
+  ASSERT_EQ(r.sourceGains.rows(), 2);
+  // Which label is the right half depends on scan order; the ratio does not.
+  const int right = r.sourceGains(0, 0) > r.sourceGains(1, 0) ? 0 : 1;
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(r.sourceGains(right, c) / r.sourceGains(1 - right, c), g[c], 0.02 * g[c]);
+  // The result is the truth times one gain per channel: the ratio result / truth is flat.
+  const Eigen::MatrixXd x = gatherTexels(domain.grid(), r.image);
+  const Eigen::MatrixXd t = gatherTexels(domain.grid(), base);
+  for (int c = 0; c < 3; ++c) {
+    const Eigen::ArrayXd ratio = x.col(c).array() / t.col(c).array();
+    const double spread = std::sqrt((ratio - ratio.mean()).square().mean()) / ratio.mean();
+    EXPECT_LT(spread, 0.02) << "channel " << c;
+  }
+  o.compensateGains = false;  // without it the gain stays away from the source boundary
+  const StitchResult plain = stitchComposite(domain, composite, segments, o);
+  const Eigen::ArrayXd ratio = gatherTexels(domain.grid(), plain.image).col(0).array() /
+                               t.col(0).array();
+  EXPECT_GT(std::sqrt((ratio - ratio.mean()).square().mean()) / ratio.mean(), 0.1);
+}
+
+TEST(GainCompensation, PartialsSeeingTheSameTexelsGiveTheirGainRatio) {
+  const Eigen::MatrixXd truth = (Eigen::MatrixXd::Random(400, 3).array() * 0.3 + 0.5).matrix();
+  std::vector<Eigen::MatrixXd> values{truth * 0.9, truth * 1.5};
+  std::vector<Eigen::VectorXd> confidence{Eigen::VectorXd::Ones(400), Eigen::VectorXd::Zero(400)};
+  confidence[1].tail(200).setOnes();  // the second sees half the texels
+  const std::vector<GainLink> links = partialGainLinks(values, confidence, 3);
+  ASSERT_EQ(links.size(), 1u);
+  EXPECT_EQ(links[0].weight, 200.0);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(links[0].logRatio[c], std::log(0.9 / 1.5), 1e-6);
 }
 
 TEST(Stitch, LockedTexelsAreBitIdentical) {
@@ -92,8 +165,9 @@ struct Quality {
   double boundaryJump = 0.0;
 };
 
-Quality quality(const TexelGrid& g, const Image& result, const Image& truth,
+Quality quality(const TexelGrid& g, Image result, const Image& truth,
                 const std::vector<int32_t>& labels) {
+  for (float& v : result.pixels) v = std::clamp(v, 0.0f, 1.0f);  // what an 8-bit file holds
   const Eigen::MatrixXd x = gatherTexels(g, result).leftCols(3), t = gatherTexels(g, truth).leftCols(3);
   Quality q;
   std::vector<uint8_t> known(labels.size());
@@ -152,11 +226,11 @@ TEST(StitchSlow, MultiviewBobHalvesTheErrorAndCutsSourceJumpsFiveFold) {
   std::cout << "[ stitch ] composite mode: RMS " << before.rmsAfterFit << " -> "
             << composited.rmsAfterFit << ", source jump " << before.boundaryJump << " -> "
             << composited.boundaryJump << "\n";
-  // Issue 5 asks for half the composite's RMS; at the default alpha neither mode reaches it
-  // (composite 0.106 -> 0.093, partials -> 0.061; partials reaches 0.052 at alpha = 1): the
-  // per-view gains and shading also scale the gradients kept inside each region. Only an
-  // improvement is asserted; the figures are reported in the issue.
-  EXPECT_LT(composited.rmsAfterFit, before.rmsAfterFit);
+  // Issue 5 asks for half the composite's RMS. The views differ by gain, colour cast and a
+  // smooth shading term; gain compensation removes the first two, the shading inside each
+  // region stays. Measured: composite mode 0.106 -> 0.057 (0.54x, short of 0.5x), partials
+  // 0.106 -> 0.049 (0.46x). The composite bound below guards against regressions.
+  EXPECT_LE(composited.rmsAfterFit, 0.6 * before.rmsAfterFit);
   EXPECT_LE(composited.boundaryJump, 0.2 * before.boundaryJump);
 
   std::vector<Image> partials, confidences;
@@ -172,7 +246,7 @@ TEST(StitchSlow, MultiviewBobHalvesTheErrorAndCutsSourceJumpsFiveFold) {
   std::cout << "[ stitch ] partials mode: RMS " << before.rmsAfterFit << " -> "
             << blended.rmsAfterFit << ", source jump " << before.boundaryJump << " -> "
             << blended.boundaryJump << "\n";
-  EXPECT_LT(blended.rmsAfterFit, before.rmsAfterFit);
+  EXPECT_LE(blended.rmsAfterFit, 0.5 * before.rmsAfterFit);
   EXPECT_LE(blended.boundaryJump, 0.2 * before.boundaryJump);
 }
 

@@ -20,6 +20,10 @@ struct StitchOptions {
   /// Optional lock mask (image of the texture's size): texels where channel 0 > 0.5 keep the
   /// composite value exactly.
   Image lock;
+  /// Divide each source by its estimated gain per colour channel before stitching (beyond the
+  /// paper: cameras differ by exposure and colour cast, which the screening would otherwise keep
+  /// away from source boundaries). See gain_compensation.h.
+  bool compensateGains = true;
   SolverSettings solver;
   /// Throws InvalidInputError naming the first bad field.
   void validate() const;
@@ -31,6 +35,8 @@ struct StitchResult {
   SolveReport report;
   int sources = 0;           ///< distinct source labels / partial textures used
   int64_t lockedTexels = 0;  ///< texels held at their input value
+  /// Gain divided out of each source per colour channel (sources x channels; ones when off).
+  Eigen::MatrixXd sourceGains;
 };
 
 /// Composite mode: `composite` holds each texel from one source, `segments` a distinct colour
