@@ -1,5 +1,5 @@
 // Screened-Poisson filtering: identity at beta = 1, multigrid matches direct, metric awareness,
-// smoothing lowers seam jump and energy, beta maps, normal maps stay unit length.
+// smoothing lowers seam jump and energy, beta maps, normal maps stay unit length (every glTF model), seam jump table on every shared mesh.
 #include <gtest/gtest.h>
 
 #include "app_fixtures.h"
@@ -127,15 +127,23 @@ TEST(Filter, InactiveTexelsAreUntouched) {
     }
 }
 
-TEST(Filter, NormalMapsStayUnitLength) {
-  const std::filesystem::path dir = test::sharedData() / "Avocado";
-  const TexturedMesh mesh = readMesh(dir / "glTF" / "Avocado.gltf");
-  // Every fourth texel of the 2048² map: a 512² normal map keeps the test quick.
-  const Image full = readImage(dir / "glTF" / "Avocado_normal.png");
-  Image normals(full.width / 4, full.height / 4, full.channels, full.format);
+/// A glTF model of ../shared/data with a tangent-space normal map.
+struct NormalMapped {
+  std::string name, gltf, normals;  ///< model name; paths relative to sharedData()
+};
+
+class SharedNormalMapsSlow : public ::testing::TestWithParam<NormalMapped> {};
+
+TEST_P(SharedNormalMapsSlow, SmoothedNormalsStayUnitLength) {
+  const NormalMapped& m = GetParam();
+  const TexturedMesh mesh = readMesh(test::sharedData() / m.gltf);
+  // Every k-th texel of the map, at most 512 across: keeps the test quick.
+  const Image full = readImage(test::sharedData() / m.normals);
+  const int k = std::max(1, full.width / 512);
+  Image normals(full.width / k, full.height / k, full.channels, full.format);
   for (int j = 0; j < normals.height; ++j)
     for (int i = 0; i < normals.width; ++i)
-      for (int c = 0; c < full.channels; ++c) normals.at(i, j, c) = full.at(4 * i, 4 * j, c);
+      for (int c = 0; c < full.channels; ++c) normals.at(i, j, c) = full.at(k * i, k * j, c);
   const TexelDomain domain(mesh, normals.width, normals.height);
   FilterOptions o = withSolver(SolverKind::Multigrid, 0.0);
   o.normalMap = true;
@@ -150,9 +158,49 @@ TEST(Filter, NormalMapsStayUnitLength) {
     for (int c = 0; c < 3; ++c) n[c] = decoded.at(x + g.x0, y + g.y0, c);
     worst = std::max(worst, std::abs(n.norm() - 1.0));
   }
+  std::cout << "[ normals ] " << m.name << " worst | |n| - 1 | = " << worst << "\n";
   // 8-bit quantisation of a unit vector moves its length by at most ~sqrt(3)/255.
   EXPECT_LE(worst, 1e-3 + std::sqrt(3.0) / 255.0);
 }
+
+INSTANTIATE_TEST_SUITE_P(
+    GltfModels, SharedNormalMapsSlow,
+    ::testing::Values(NormalMapped{"Avocado", "Avocado/glTF/Avocado.gltf", "Avocado/glTF/Avocado_normal.png"},
+                      NormalMapped{"BoomBox", "BoomBox/glTF/BoomBox.gltf", "BoomBox/glTF/BoomBox_normal.png"},
+                      NormalMapped{"Lantern", "Lantern/glTF/Lantern.gltf", "Lantern/glTF/Lantern_normal.png"},
+                      NormalMapped{"WaterBottle", "WaterBottle/glTF/WaterBottle.gltf",
+                                   "WaterBottle/glTF/WaterBottle_normal.png"}),
+    [](const ::testing::TestParamInfo<NormalMapped>& info) { return info.param.name; });
+
+/// Smoothing and sharpening each shared mesh's own texture (at most 512 across).
+class SharedFilterJumpSlow : public ::testing::TestWithParam<test::SharedMesh> {};
+
+TEST_P(SharedFilterJumpSlow, SmoothingLowersSeamJumpAndEnergy) {
+  const test::SharedMesh& s = GetParam();
+  const Image texture = test::textureAtMost(readImage(test::sharedData() / s.texture), 512);
+  const TexelDomain domain(readMesh(test::sharedData() / s.obj), texture.width, texture.height);
+  const Image smooth = filterTexture(domain, texture, withSolver(SolverKind::Multigrid, 0.0)).image;
+  const Image sharp = filterTexture(domain, texture, withSolver(SolverKind::Multigrid, 3.0)).image;
+  const auto jump = [&](const Image& image) {
+    return measureSeamJump(domain.mesh(), domain.atlas(), image).rms;
+  };
+  const double e0 = test::dirichletEnergy(domain, texture);
+  const double e1 = test::dirichletEnergy(domain, smooth), e3 = test::dirichletEnergy(domain, sharp);
+  std::cout << "[ filter ] " << s.name << " " << texture.width << "x" << texture.height
+            << " seam jump " << jump(texture) << " -> beta 0: " << jump(smooth)
+            << ", beta 3: " << jump(sharp) << "; energy " << e0 << " -> " << e1 << ", " << e3
+            << "\n";
+  EXPECT_LT(e1, e0);
+  EXPECT_GT(e3, e0);
+  if (domain.atlas().seams.empty()) {  // Suzanne: no seam to measure
+    EXPECT_EQ(jump(smooth), 0.0);
+    return;
+  }
+  EXPECT_LT(jump(smooth), jump(texture));
+}
+
+INSTANTIATE_TEST_SUITE_P(AllMeshes, SharedFilterJumpSlow, ::testing::ValuesIn(test::sharedMeshes()),
+                         test::sharedMeshName);
 
 /// Multigrid (default settings) against the direct solution on every shared mesh at 1024².
 class SharedFilterSlow : public ::testing::TestWithParam<test::SharedMesh> {};
