@@ -57,8 +57,9 @@ void runStitch(StitchArgs args) {
   args.options.solver = args.solver.settings();
   const bool compositeMode = !args.composite.empty();
   if (compositeMode == !args.partials.empty())
-    throw InvalidInputError("give either --composite with --segments, or --partials with "
-                            "--confidence");
+    throw InvalidInputError(
+        "give either --composite with --segments, or --partials with "
+        "--confidence");
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   Image composite, segments;
   std::vector<Image> partials, confidences;
@@ -79,9 +80,9 @@ void runStitch(StitchArgs args) {
   const TexelDomain domain(std::move(mesh), first.width, first.height, {},
                            terminalProgress(!args.report.quiet));
   timer.lap("operators");
-  const StitchResult result =
-      compositeMode ? stitchComposite(domain, composite, segments, args.options)
-                    : stitchPartials(domain, partials, confidences, args.options);
+  const StitchResult result = compositeMode
+                                  ? stitchComposite(domain, composite, segments, args.options)
+                                  : stitchPartials(domain, partials, confidences, args.options);
   timer.lap("solve");
   writeTextureOutput(args.out, domain.mesh(), result.image, "baseColor", args.bitDepth);
   timer.lap("write");
@@ -125,8 +126,8 @@ void addStitchCommand(CLI::App& app) {
       ->default_val(1e2)
       ->check(CLI::PositiveNumber);
   cmd->add_flag("!--no-gain-compensation", args->options.compensateGains,
-               "Keep each source's exposure and colour cast (by default one gain per source and "
-               "channel, estimated where sources meet, is divided out before stitching)");
+                "Keep each source's exposure and colour cast (by default one gain per source and "
+                "channel, estimated where sources meet, is divided out before stitching)");
   cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: the input's)");
   addWeldToleranceOption(cmd, args->weldTolerance);
   addSolverOptions(cmd, args->solver, 10);

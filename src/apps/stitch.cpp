@@ -31,7 +31,9 @@ Eigen::VectorXd channelZero(const TexelGrid& grid, const Image& image) {
 }
 
 /// Colour channels that gain compensation touches (not alpha).
-int colourChannels(Eigen::Index channels) { return static_cast<int>(std::min<Eigen::Index>(channels, 3)); }
+int colourChannels(Eigen::Index channels) {
+  return static_cast<int>(std::min<Eigen::Index>(channels, 3));
+}
 
 /// Solves (alpha W M W + S + lock) x = alpha W M W xbar + div + lock input; locked texels end
 /// exactly at `input` (the uncompensated source values).
@@ -47,8 +49,8 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
     for (Eigen::SparseMatrix<double>::InnerIterator it(wmw, k); it; ++it)
       it.valueRef() *= known[it.row()] * known[it.col()];
   // A little plain screening keeps components that no source sees solvable.
-  Eigen::SparseMatrix<double> a = options.alpha * wmw + 1e-6 * options.alpha * ops.mass() +
-                                  ops.stiffness();
+  Eigen::SparseMatrix<double> a =
+      options.alpha * wmw + 1e-6 * options.alpha * ops.mass() + ops.stiffness();
   Eigen::MatrixXd rhs = options.alpha * (wmw * xbar) + divergence;
   StitchResult result;
   std::vector<uint8_t> locked(static_cast<size_t>(n), 0);
@@ -150,8 +152,7 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
     const auto links = compositeGainLinks(domain.operators().stiffness(), labels, xbar, channels);
     gains = solveLogGains(sources, channels, links, texelsPerSource).array().exp();
     for (Eigen::Index u = 0; u < xbar.rows(); ++u)
-      if (labels[u] > 0)
-        xbar.row(u).head(channels).array() /= gains.row(labels[u] - 1).array();
+      if (labels[u] > 0) xbar.row(u).head(channels).array() /= gains.row(labels[u] - 1).array();
   }
   Eigen::VectorXd known(xbar.rows());
   for (Eigen::Index u = 0; u < xbar.rows(); ++u) known[u] = labels[u] > 0 ? 1.0 : 0.0;
@@ -217,9 +218,12 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
   if (options.compensateGains && sources > 1) {
     Eigen::VectorXd texelsPerSource = Eigen::VectorXd::Zero(sources);
     for (int i = 0; i < sources; ++i)
-      texelsPerSource[i] = static_cast<double>((confidence[static_cast<size_t>(i)].array() > 0.0).count());
+      texelsPerSource[i] =
+          static_cast<double>((confidence[static_cast<size_t>(i)].array() > 0.0).count());
     gains = solveLogGains(sources, colour, partialGainLinks(values, confidence, colour),
-                          texelsPerSource).array().exp();
+                          texelsPerSource)
+                .array()
+                .exp();
     for (int i = 0; i < sources; ++i)
       for (Eigen::Index u = 0; u < n; ++u)
         values[static_cast<size_t>(i)].row(u).head(colour).array() /= gains.row(i).array();
@@ -234,7 +238,8 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
                        double total = 0.0;
                        for (size_t i = 0; i < partials.size(); ++i) {
                          double least = 1.0;
-                         for (int32_t u : texels) least = u >= 0 ? std::min(least, confidence[i][u]) : 0.0;
+                         for (int32_t u : texels)
+                           least = u >= 0 ? std::min(least, confidence[i][u]) : 0.0;
                          beta[i][cell] = least;
                          total += least;
                        }

@@ -1,5 +1,6 @@
 // Screened-Poisson filtering: identity at beta = 1, multigrid matches direct, metric awareness,
-// smoothing lowers seam jump and energy, beta maps, normal maps stay unit length (every glTF model), seam jump table on every shared mesh.
+// smoothing lowers seam jump and energy (procedural and every shared mesh, with a table), beta
+// maps, normal maps stay unit length (every glTF model with one).
 #include <gtest/gtest.h>
 
 #include "app_fixtures.h"
@@ -165,11 +166,12 @@ TEST_P(SharedNormalMapsSlow, SmoothedNormalsStayUnitLength) {
 
 INSTANTIATE_TEST_SUITE_P(
     GltfModels, SharedNormalMapsSlow,
-    ::testing::Values(NormalMapped{"Avocado", "Avocado/glTF/Avocado.gltf", "Avocado/glTF/Avocado_normal.png"},
-                      NormalMapped{"BoomBox", "BoomBox/glTF/BoomBox.gltf", "BoomBox/glTF/BoomBox_normal.png"},
-                      NormalMapped{"Lantern", "Lantern/glTF/Lantern.gltf", "Lantern/glTF/Lantern_normal.png"},
-                      NormalMapped{"WaterBottle", "WaterBottle/glTF/WaterBottle.gltf",
-                                   "WaterBottle/glTF/WaterBottle_normal.png"}),
+    ::testing::Values(
+        NormalMapped{"Avocado", "Avocado/glTF/Avocado.gltf", "Avocado/glTF/Avocado_normal.png"},
+        NormalMapped{"BoomBox", "BoomBox/glTF/BoomBox.gltf", "BoomBox/glTF/BoomBox_normal.png"},
+        NormalMapped{"Lantern", "Lantern/glTF/Lantern.gltf", "Lantern/glTF/Lantern_normal.png"},
+        NormalMapped{"WaterBottle", "WaterBottle/glTF/WaterBottle.gltf",
+                     "WaterBottle/glTF/WaterBottle_normal.png"}),
     [](const ::testing::TestParamInfo<NormalMapped>& info) { return info.param.name; });
 
 /// Smoothing and sharpening each shared mesh's own texture (at most 512 across).
@@ -185,7 +187,8 @@ TEST_P(SharedFilterJumpSlow, SmoothingLowersSeamJumpAndEnergy) {
     return measureSeamJump(domain.mesh(), domain.atlas(), image).rms;
   };
   const double e0 = test::dirichletEnergy(domain, texture);
-  const double e1 = test::dirichletEnergy(domain, smooth), e3 = test::dirichletEnergy(domain, sharp);
+  const double e1 = test::dirichletEnergy(domain, smooth),
+               e3 = test::dirichletEnergy(domain, sharp);
   std::cout << "[ filter ] " << s.name << " " << texture.width << "x" << texture.height
             << " seam jump " << jump(texture) << " -> beta 0: " << jump(smooth)
             << ", beta 3: " << jump(sharp) << "; energy " << e0 << " -> " << e1 << ", " << e3

@@ -111,8 +111,8 @@ TEST(GainCompensation, StitchingRemovesAPerChannelGainBetweenSources) {
   }
   o.compensateGains = false;  // without it the gain stays away from the source boundary
   const StitchResult plain = stitchComposite(domain, composite, segments, o);
-  const Eigen::ArrayXd ratio = gatherTexels(domain.grid(), plain.image).col(0).array() /
-                               t.col(0).array();
+  const Eigen::ArrayXd ratio =
+      gatherTexels(domain.grid(), plain.image).col(0).array() / t.col(0).array();
   EXPECT_GT(std::sqrt((ratio - ratio.mean()).square().mean()) / ratio.mean(), 0.1);
 }
 
@@ -168,7 +168,8 @@ struct Quality {
 Quality quality(const TexelGrid& g, Image result, const Image& truth,
                 const std::vector<int32_t>& labels) {
   for (float& v : result.pixels) v = std::clamp(v, 0.0f, 1.0f);  // what an 8-bit file holds
-  const Eigen::MatrixXd x = gatherTexels(g, result).leftCols(3), t = gatherTexels(g, truth).leftCols(3);
+  const Eigen::MatrixXd x = gatherTexels(g, result).leftCols(3),
+                        t = gatherTexels(g, truth).leftCols(3);
   Quality q;
   std::vector<uint8_t> known(labels.size());
   for (size_t k = 0; k < labels.size(); ++k) known[k] = labels[k] > 0;

@@ -17,9 +17,9 @@ namespace texgrad {
 /// What two sources say about their relative gain: per channel, the median over their meeting
 /// texels of log(x_a / x_b), with the number of texels it came from as weight.
 struct GainLink {
-  int a = 0, b = 0;           ///< source indices, 0-based
+  int a = 0, b = 0;             ///< source indices, 0-based
   Eigen::RowVectorXd logRatio;  ///< per channel, median of log(x_a) - log(x_b)
-  double weight = 0.0;        ///< number of observations
+  double weight = 0.0;          ///< number of observations
 };
 
 /// Per-source, per-channel log gains l (sources x channels) minimising
