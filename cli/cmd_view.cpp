@@ -1,5 +1,5 @@
-// `texgrad view`: serves the browser viewer for one mesh and app (filter, geodesic); the solving
-// is the apps' and the serving the viewer module's, this file only maps flags onto their options.
+// `texgrad view`: serves the browser viewer for one mesh and app (filter, geodesic, react, lic);
+// the solving is the apps', the serving the viewer module's; this file maps flags onto options.
 #include <iostream>
 
 #include "cli_common.h"
@@ -36,7 +36,7 @@ void runView(ViewArgs& args) {
                             "); resample the texture first");
   const int32_t faces = static_cast<int32_t>(mesh.faceCount());
   std::cerr << "texgrad view: building the " << width << "x" << height << " texel domain...\n";
-  const TexelDomain domain(std::move(mesh), width, height, {}, terminalProgress(true));
+  TexelDomain domain(std::move(mesh), width, height, {}, terminalProgress(true));
   viewer::ViewerSession session(viewer::makeViewerApp(kind, domain, texture, args.appOptions),
                                 faces, args.session);
   viewer::ViewerServer server(session, domain, args.server);
@@ -57,14 +57,15 @@ void addViewCommand(CLI::App& app) {
   auto args = std::make_shared<ViewArgs>();
   CLI::App* cmd = app.add_subcommand(
       "view",
-      "Serve an interactive viewer in the browser: paint filter strokes or click geodesic sources "
-      "and watch the solver refine one V-cycle per frame. Binds to 127.0.0.1; any other --host "
+      "Serve an interactive viewer in the browser: paint filter strokes, click geodesic sources "
+      "or run reaction-diffusion or LIC, and watch the solver refine one V-cycle (or time step) per "
+      "frame. Binds to 127.0.0.1; any other --host "
       "prints a random access token that every request must carry.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   cmd->add_option("texture", args->texture, "Texture (default: the mesh's base-colour texture)");
   cmd->add_option("--app", args->app, "Interactive app")
-      ->check(CLI::IsMember({"filter", "geodesic"}))
+      ->check(CLI::IsMember({"filter", "geodesic", "react", "lic"}))
       ->default_val("filter");
   cmd->add_option("--host", args->server.host, "Address to bind (IP literal or localhost)")
       ->default_val("127.0.0.1");
@@ -84,6 +85,13 @@ void addViewCommand(CLI::App& app) {
   cmd->add_option("--geodesic-alpha", args->appOptions.geodesicAlpha,
                   "Geodesic: screening weight of the diffusion step (heat time 1 / alpha)")
       ->default_val(1e3);
+  cmd->add_option("--preset", args->appOptions.reactPreset,
+                  "React: Gray-Scott parameters (stripes or dots)")
+      ->check(CLI::IsMember({"stripes", "dots"}))
+      ->default_val("stripes");
+  cmd->add_option("--seed", args->appOptions.seed,
+                  "React: seed of the initial spots; lic: of the noise (Reset adds 1)")
+      ->default_val(1);
   cmd->add_option("--max-fps", args->session.maxUpdatesPerSecond,
                   "Upper bound on solver steps (frames) per second")
       ->default_val(60.0);

@@ -10,7 +10,11 @@ packages=(
   libboost-dev
 )
 if [[ "${1:-}" == "--viewer" ]]; then
-  packages+=(nodejs npm chromium)
+  # Debian's packages unless the commands are already there (e.g. Node.js from another source,
+  # whose npm would conflict with Debian's).
+  command -v node >/dev/null || packages+=(nodejs)
+  command -v npm >/dev/null || packages+=(npm)
+  command -v chromium >/dev/null || packages+=(chromium)
 fi
 missing=()
 for p in "${packages[@]}"; do

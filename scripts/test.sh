@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # One command on a fresh Debian 12 box (as root): install, build with warnings as errors, run the
-# test suite under AddressSanitizer+UBSan (fast tests) and then the whole suite in Release.
+# test suite under AddressSanitizer+UBSan (fast tests) and then the whole suite in Release, which
+# includes the viewer's end-to-end tests in headless Chromium (CTest ViewerE2E).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/install-deps.sh
+bash scripts/install-deps.sh --viewer
+echo "== viewer page (npm ci in viewer/)"
+bash scripts/build-viewer.sh
 jobs="$(nproc)"
 
 echo "== sanitizer build (ASan + UBSan)"
@@ -15,5 +18,6 @@ ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build/asan -j"$jobs" --output-on-failure -E 'Slow'
 
 echo "== release build"
-bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON
+bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_VIEWER=ON \
+  -DTEXGRAD_E2E_TESTS=ON
 ctest --test-dir build/release -j"$jobs" --output-on-failure

@@ -80,22 +80,21 @@ class GeodesicView final : public ViewerApp {
     header.height = static_cast<uint32_t>(distances_.height);
     header.scale = static_cast<float>(maxDistance_ > 0.0 ? maxDistance_ : 1.0);
     const size_t n = static_cast<size_t>(distances_.width) * distances_.height;
-    std::vector<uint16_t> codes(n, kNoValue);
+    texels.assign(2 * n, 0xFFu);  // kNoValue, little-endian
     const Eigen::VectorXd& d = solver_.distances();
-    if (!sources_.empty() && d.size() == grid.unknownCount())
-      for (int u = 0; u < grid.unknownCount(); ++u) {
-        const int t = grid.texelOfUnknown[u];
-        const int x = t % grid.nx, y = t / grid.nx;
-        if (!grid.inImage(x, y)) continue;
-        if (!std::isfinite(d[u])) continue;  // unreachable from every source: no value
-        const double v = std::clamp(d[u] / header.scale, 0.0, 1.0);
-        codes[static_cast<size_t>(y + grid.y0) * distances_.width + (x + grid.x0)] =
-            static_cast<uint16_t>(std::lround(v * kMaxCode));
-      }
-    texels.resize(2 * n);
-    for (size_t i = 0; i < n; ++i) {
-      texels[2 * i] = static_cast<uint8_t>(codes[i] & 0xFFu);
-      texels[2 * i + 1] = static_cast<uint8_t>(codes[i] >> 8);
+    if (sources_.empty() || d.size() != grid.unknownCount()) return;
+    const double toCode = kMaxCode / static_cast<double>(header.scale);
+    for (int u = 0; u < grid.unknownCount(); ++u) {
+      const int t = grid.texelOfUnknown[u];
+      const int x = t % grid.nx, y = t / grid.nx;
+      if (!grid.inImage(x, y)) continue;
+      if (!std::isfinite(d[u])) continue;  // unreachable from every source: no value
+      const auto code =
+          static_cast<uint16_t>(std::lround(std::clamp(d[u] * toCode, 0.0, double{kMaxCode})));
+      uint8_t* out = texels.data() + 2 * (static_cast<size_t>(y + grid.y0) * distances_.width +
+                                          static_cast<size_t>(x + grid.x0));
+      out[0] = static_cast<uint8_t>(code & 0xFFu);
+      out[1] = static_cast<uint8_t>(code >> 8);
     }
   }
 

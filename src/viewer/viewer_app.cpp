@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "app_views.h"
+#include "texgrad/apps/reaction_diffusion.h"
 #include "texgrad/core/error.h"
 
 namespace texgrad::viewer {
@@ -12,11 +13,20 @@ namespace texgrad::viewer {
 ViewerAppKind parseViewerAppKind(const std::string& text) {
   if (text == "filter") return ViewerAppKind::Filter;
   if (text == "geodesic") return ViewerAppKind::Geodesic;
-  throw InvalidInputError("unknown viewer app \"" + text + "\": use filter or geodesic");
+  if (text == "react") return ViewerAppKind::React;
+  if (text == "lic") return ViewerAppKind::Lic;
+  throw InvalidInputError("unknown viewer app \"" + text +
+                          "\": use filter, geodesic, react or lic");
 }
 
 std::string toString(ViewerAppKind kind) {
-  return kind == ViewerAppKind::Filter ? "filter" : "geodesic";
+  switch (kind) {
+    case ViewerAppKind::Filter: return "filter";
+    case ViewerAppKind::Geodesic: return "geodesic";
+    case ViewerAppKind::React: return "react";
+    case ViewerAppKind::Lic: return "lic";
+  }
+  return "?";
 }
 
 void ViewerAppOptions::validate() const {
@@ -30,18 +40,42 @@ void ViewerAppOptions::validate() const {
   if (!(geodesicAlpha >= kMinAlpha && geodesicAlpha <= kMaxAlpha))
     throw InvalidInputError("geodesicAlpha must lie in [" + std::to_string(kMinAlpha) + ", " +
                             std::to_string(kMaxAlpha) + "]");
+  parseReactionPreset(reactPreset);  // throws InvalidInputError naming the presets
 }
 
-std::unique_ptr<ViewerApp> makeViewerApp(ViewerAppKind kind, const TexelDomain& domain,
-                                         const Image& texture, const ViewerAppOptions& options) {
+namespace {
+
+void checkAppInputs(const TexelDomain& domain, const Image& texture,
+                    const ViewerAppOptions& options) {
   options.validate();
   if (texture.width != domain.grid().imageWidth || texture.height != domain.grid().imageHeight)
     throw InvalidInputError("the texture is " + std::to_string(texture.width) + "x" +
                             std::to_string(texture.height) + " but the domain was built at " +
                             std::to_string(domain.grid().imageWidth) + "x" +
                             std::to_string(domain.grid().imageHeight));
-  if (kind == ViewerAppKind::Filter) return makeFilterView(domain, texture, options);
-  return makeGeodesicView(domain, texture, options);
+}
+
+}  // namespace
+
+std::unique_ptr<ViewerApp> makeViewerApp(ViewerAppKind kind, TexelDomain& domain,
+                                         const Image& texture, const ViewerAppOptions& options) {
+  if (kind != ViewerAppKind::Lic)
+    return makeViewerApp(kind, static_cast<const TexelDomain&>(domain), texture, options);
+  checkAppInputs(domain, texture, options);
+  return makeLicView(domain, options);
+}
+
+std::unique_ptr<ViewerApp> makeViewerApp(ViewerAppKind kind, const TexelDomain& domain,
+                                         const Image& texture, const ViewerAppOptions& options) {
+  checkAppInputs(domain, texture, options);
+  switch (kind) {
+    case ViewerAppKind::Filter: return makeFilterView(domain, texture, options);
+    case ViewerAppKind::Geodesic: return makeGeodesicView(domain, texture, options);
+    case ViewerAppKind::React: return makeReactView(domain, texture, options);
+    case ViewerAppKind::Lic:
+      throw InvalidInputError("the lic viewer app needs a non-const TexelDomain");
+  }
+  throw InvalidInputError("unknown viewer app");
 }
 
 Eigen::Vector2d hitUv(const TexturedMesh& mesh, const SurfaceHit& at) {

@@ -30,6 +30,7 @@ ViewerSession::ViewerSession(std::unique_ptr<ViewerApp> app, int32_t faceCount,
     : app_(std::move(app)), faceCount_(faceCount), options_(options) {
   options_.validate();
   state_.app = app_->name();
+  iterationLimit_ = static_cast<uint32_t>(options_.maxIterations);
   publish();
 }
 
@@ -92,6 +93,7 @@ std::string ViewerSession::stateJson() const {
                         {"residual", s.residual},
                         {"updatesPerSecond", s.updatesPerSecond},
                         {"lastStepSeconds", s.lastStepSeconds},
+                        {"lastFrameSeconds", s.lastFrameSeconds},
                         {"error", s.error}}
       .dump();
 }
@@ -99,11 +101,13 @@ std::string ViewerSession::stateJson() const {
 bool ViewerSession::waitSettled(double seconds) const {
   std::unique_lock lock(mutex_);
   return wake_.wait_for(lock, std::chrono::duration<double>(seconds), [&] {
-    return queue_.empty() && !state_.running && (!dirty_ || state_.paused);
+    return queue_.empty() && !state_.running && (!dirty_ || state_.paused) &&
+           stepsRequested_ == 0;
   });
 }
 
 void ViewerSession::publish() {
+  const Clock::time_point start = Clock::now();
   FrameHeader header;
   std::vector<uint8_t> texels;
   app_->frame(header, texels);
@@ -117,6 +121,7 @@ void ViewerSession::publish() {
     bytes = std::make_shared<const std::vector<uint8_t>>(encodeFrame(header, texels));
     frame_ = bytes;
     sink = sink_;
+    state_.lastFrameSeconds = std::chrono::duration<double>(Clock::now() - start).count();
   }
   if (sink) sink(bytes);
 }
@@ -141,6 +146,7 @@ void ViewerSession::handle(Pending& pending) {
     if (run->action == RunAction::Start) {
       state_.paused = false;
       dirty_ = true;
+      iterationLimit_ = state_.iteration + static_cast<uint32_t>(options_.maxIterations);
     } else if (run->action == RunAction::Pause) {
       state_.paused = true;
     } else {
@@ -153,6 +159,7 @@ void ViewerSession::handle(Pending& pending) {
     std::lock_guard lock(mutex_);
     dirty_ = true;
     state_.iteration = 0;
+    iterationLimit_ = static_cast<uint32_t>(options_.maxIterations);
     reply = okReply("change");
   }
   if (pending.request.id >= 0) reply["id"] = pending.request.id;
@@ -225,7 +232,7 @@ void ViewerSession::run() {
                 ? rate
                 : (1.0 - kRateSmoothing) * state_.updatesPerSecond + kRateSmoothing * rate;
       }
-      if (result.settled || static_cast<int>(state_.iteration) >= options_.maxIterations)
+      if (result.settled || state_.iteration >= iterationLimit_)
         dirty_ = false;
     }
     lastStep = t1;

@@ -16,7 +16,9 @@ export const chromiumPath = process.env.CHROMIUM || "/usr/bin/chromium";
 
 /// Starts `texgrad view ARGS --port 0` and resolves with { url, process } once it prints its URL.
 export function startServer(args, { timeoutMs = 120000 } = {}) {
-  const child = spawn(cli, ["view", ...args, "--port", "0"], { stdio: ["ignore", "pipe", "pipe"] });
+  const webRoot = process.env.TEXGRAD_WEB_ROOT ? ["--web-root", process.env.TEXGRAD_WEB_ROOT] : [];
+  const child = spawn(cli, ["view", ...args, "--port", "0", ...webRoot],
+                      { stdio: ["ignore", "pipe", "pipe"] });
   let stderr = "";
   child.stderr.on("data", (d) => { stderr += d; });
   return new Promise((resolvePromise, reject) => {
@@ -55,8 +57,9 @@ export async function openPage(url, { width = 900, height = 700 } = {}) {
   const browser = await chromium.launch({
     executablePath: chromiumPath,
     headless: true,
+    // --disable-dev-shm-usage: containers (CI) often have a 64 MB /dev/shm.
     args: ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-           "--ignore-gpu-blocklist"],
+           "--ignore-gpu-blocklist", "--disable-dev-shm-usage"],
   });
   const page = await browser.newPage({ viewport: { width, height } });
   const errors = [];

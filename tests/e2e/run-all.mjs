@@ -2,9 +2,10 @@
 // Usage: node tests/e2e/run-all.mjs (TEXGRAD_CLI, TEXGRAD_SHARED_DATA, CHROMIUM override paths).
 import { run as geodesic } from "./geodesic.e2e.mjs";
 import { run as filter } from "./filter.e2e.mjs";
+import { run as react } from "./react.e2e.mjs";
 
 let failed = 0;
-for (const [name, test] of [["geodesic", geodesic], ["filter", filter]]) {
+for (const [name, test] of [["geodesic", geodesic], ["filter", filter], ["react", react]]) {
   const start = Date.now();
   console.log(`== viewer e2e: ${name}`);
   try {

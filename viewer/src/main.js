@@ -110,21 +110,29 @@ async function main() {
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.target.copy(sphere.center);
   controls.update();
+  controls.addEventListener("change", () => requestRender());
 
   const surface = surfaceMaterial(info.width, info.height, 2 * sphere.radius);
   const model = new THREE.Mesh(geometry, surface.material);
   scene.add(model);
 
-  const stats = { frames: 0, frameTimes: [], last: null, serverState: null };
+  // Frames arrive faster than they can be shown at times: keep only the latest and upload it on
+  // the next animation frame. The scene is rendered only when something changed (a frame, the
+  // camera, the size), so an idle page leaves the CPU to the solver.
+  const stats = { frames: 0, shown: 0, frameTimes: [], shownTimes: [], last: null,
+                  serverState: null };
+  let latest = null, renderWanted = true;
+  const requestRender = () => { renderWanted = true; };
+  const recent = (times, now) => {
+    times.push(now);
+    while (times.length && times[0] < now - 1000) times.shift();
+  };
   const onFrame = (buffer) => {
-    const frame = decodeFrame(buffer);
-    surface.show(frame);
+    latest = decodeFrame(buffer);
     stats.frames += 1;
-    stats.last = frame.header;
-    stats.lastTexels = frame.texels;
-    const now = performance.now();
-    stats.frameTimes.push(now);
-    while (stats.frameTimes.length && stats.frameTimes[0] < now - 1000) stats.frameTimes.shift();
+    stats.last = latest.header;
+    stats.lastTexels = latest.texels;
+    recent(stats.frameTimes, performance.now());
   };
   const connection = new Connection(
       `${location.protocol === "https:" ? "wss" : "ws"}://${location.host}${withToken("/ws")}`,
@@ -200,7 +208,10 @@ async function main() {
   bindSlider("beta", (v) => v.toFixed(2), sendParameters);
   bindSlider("radius", (v) => v.toFixed(3));
   bindSlider("strength", (v) => v.toFixed(2));
-  bindSlider("iso", (v) => v.toFixed(3), () => surface.setIsoSpacing(Number($("iso").value)));
+  bindSlider("iso", (v) => v.toFixed(3), () => {
+    surface.setIsoSpacing(Number($("iso").value));
+    requestRender();
+  });
   surface.setIsoSpacing(Number($("iso").value));
   for (const action of ["start", "pause", "step", "reset"])
     $(action).addEventListener("click", () => connection.request({ type: "run", action }));
@@ -209,12 +220,14 @@ async function main() {
     if (reply.type === "saved") showMessage(`saved ${reply.path}`);
   });
 
-  const pageRate = () => stats.frameTimes.length;
+  // Updates per second shown on the model (frames received: stats.frameTimes).
+  const pageRate = () => stats.shownTimes.length;
   setInterval(async () => {
     stats.serverState = await connection.request({ type: "state" });
     const s = stats.serverState, h = stats.last;
     $("stats").textContent =
-        `updates/s page ${pageRate()}  server ${s.updatesPerSecond.toFixed(1)}\n` +
+        `updates/s page ${pageRate()} (received ${stats.frameTimes.length})  ` +
+        `server ${s.updatesPerSecond.toFixed(1)}\n` +
         `iteration ${s.iteration}  ${s.running ? "running" : s.paused ? "paused" : "settled"}\n` +
         `residual ${s.residual.toExponential(2)}\n` +
         (h && h.format === 2 ? `max distance ${h.scale.toPrecision(4)}\n` : "");
@@ -224,8 +237,21 @@ async function main() {
     camera.aspect = window.innerWidth / window.innerHeight;
     camera.updateProjectionMatrix();
     renderer.setSize(window.innerWidth, window.innerHeight);
+    requestRender();
   });
-  renderer.setAnimationLoop(() => renderer.render(scene, camera));
+  renderer.setAnimationLoop(() => {
+    if (latest) {
+      if (surface.show(latest)) {
+        stats.shown += 1;
+        recent(stats.shownTimes, performance.now());
+      }
+      latest = null;
+      renderWanted = true;
+    }
+    if (!renderWanted) return;
+    renderWanted = false;
+    renderer.render(scene, camera);
+  });
 
   // Hooks for the end-to-end tests (tests/e2e): picking, raw requests and counters.
   window.texgrad = {

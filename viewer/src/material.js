@@ -11,7 +11,9 @@ const vertexShader = /* glsl */ `
     gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
   }`;
 
-// Distance 0 is red, the largest distance blue; no value (inactive texel) is grey.
+// Distance 0 is red, the largest distance blue; no value (inactive texel) is grey. Distances
+// arrive as 16-bit codes uploaded unconverted as two 8-bit channels (low, high byte) and are
+// decoded here, so the page does no per-texel work (code 65535 = no value, else code / 65534).
 const fragmentShader = /* glsl */ `
   uniform sampler2D map;
   uniform int mode;
@@ -27,15 +29,16 @@ const fragmentShader = /* glsl */ `
     float light = 0.65 + 0.35 * abs(normalize(vNormal).z);
     vec4 texel = texture2D(map, vUv);
     vec3 colour;
+    float code = floor(texel.r * 255.0 + 0.5) + 256.0 * floor(texel.g * 255.0 + 0.5);
     if (mode == 0) {
       colour = texel.rgb;
-    } else if (texel.r < 0.0) {
+    } else if (code > 65534.5) {
       colour = vec3(0.5);
     } else {
-      float d = texel.r * scale;
-      float phase = d / isoSpacing;
+      float t = code / 65534.0;
+      float phase = t * scale / isoSpacing;
       float line = abs(fract(phase - 0.5) - 0.5) / max(fwidth(phase), 1e-6);
-      colour = distanceColour(texel.r) * mix(0.35, 1.0, clamp(line, 0.0, 1.0));
+      colour = distanceColour(t) * mix(0.35, 1.0, clamp(line, 0.0, 1.0));
     }
     gl_FragColor = vec4(colour * light, 1.0);
   }`;
@@ -53,40 +56,37 @@ export function surfaceMaterial(width, height, size) {
     fragmentShader,
     side: THREE.DoubleSide,
   });
-  let rgba = null, scalar = null, scalarData = null;
-  const ensure = (format) => {
-    if (format === 1 && !rgba) {
-      rgba = new THREE.DataTexture(new Uint8Array(4 * width * height), width, height,
-                                   THREE.RGBAFormat, THREE.UnsignedByteType);
-      rgba.magFilter = THREE.LinearFilter;
-      rgba.minFilter = THREE.LinearFilter;
+  // One texture per format; show() points it at the frame's bytes (no copy, no conversion) and
+  // WebGL uploads them on the next render.
+  const textures = new Map();
+  const texture = (format, data) => {
+    let t = textures.get(format);
+    if (!t) {
+      t = format === 1
+          ? new THREE.DataTexture(data, width, height, THREE.RGBAFormat, THREE.UnsignedByteType)
+          : new THREE.DataTexture(data, width, height, THREE.RGFormat, THREE.UnsignedByteType);
+      const filter = format === 1 ? THREE.LinearFilter : THREE.NearestFilter;
+      t.magFilter = filter;
+      t.minFilter = filter;
+      t.generateMipmaps = false;
+      t.unpackAlignment = 1;
+      textures.set(format, t);
     }
-    if (format === 2 && !scalar) {
-      scalarData = new Float32Array(width * height);
-      scalar = new THREE.DataTexture(scalarData, width, height, THREE.RedFormat, THREE.FloatType);
-      scalar.magFilter = THREE.NearestFilter;
-      scalar.minFilter = THREE.NearestFilter;
-    }
+    t.image.data = data;
+    t.needsUpdate = true;
+    return t;
   };
   return {
     material,
+    /// Shows a decoded frame; returns false if it does not fit the texture.
     show(frame) {
-      const { header, texels } = frame;
-      if (header.width !== width || header.height !== height) return;
-      ensure(header.format);
-      if (header.format === 1) {
-        rgba.image.data.set(texels);
-        rgba.needsUpdate = true;
-        material.uniforms.map.value = rgba;
-        material.uniforms.mode.value = 0;
-      } else {
-        for (let i = 0; i < texels.length; ++i)
-          scalarData[i] = texels[i] === 65535 ? -1 : texels[i] / 65534;
-        scalar.needsUpdate = true;
-        material.uniforms.map.value = scalar;
-        material.uniforms.mode.value = 1;
-        material.uniforms.scale.value = header.scale;
-      }
+      const { header, bytes } = frame;
+      if (header.width !== width || header.height !== height) return false;
+      if (header.format !== 1 && header.format !== 2) return false;
+      material.uniforms.map.value = texture(header.format, bytes);
+      material.uniforms.mode.value = header.format === 1 ? 0 : 1;
+      if (header.format === 2) material.uniforms.scale.value = header.scale;
+      return true;
     },
     /// Isoline spacing as a fraction of the model size.
     setIsoSpacing(fraction) { material.uniforms.isoSpacing.value = fraction * size; },

@@ -29,7 +29,10 @@ export function decodeFrame(buffer) {
     scale: view.getFloat32(28, true),
   };
   const n = header.width * header.height;
-  const texels = header.format === 1 ? new Uint8Array(buffer, 32, 4 * n)
-                                     : new Uint16Array(buffer.slice(32, 32 + 2 * n));
-  return { header, texels };
+  const texelBytes = (header.format === 1 ? 4 : 2) * n;
+  if (buffer.byteLength < 32 + texelBytes) throw new Error("truncated texgrad frame");
+  // Views into the message, no copies: raw bytes (what the page uploads) and typed texels.
+  const bytes = new Uint8Array(buffer, 32, texelBytes);
+  const texels = header.format === 1 ? bytes : new Uint16Array(buffer, 32, n);
+  return { header, bytes, texels };
 }

@@ -14,8 +14,8 @@
 namespace texgrad::viewer {
 
 /// Apps the viewer can drive.
-enum class ViewerAppKind { Filter, Geodesic };
-/// Parses "filter" or "geodesic"; throws InvalidInputError otherwise (naming the others).
+enum class ViewerAppKind { Filter, Geodesic, React, Lic };
+/// Parses "filter", "geodesic", "react" or "lic"; throws InvalidInputError otherwise (naming the others).
 ViewerAppKind parseViewerAppKind(const std::string& text);
 /// Name accepted by parseViewerAppKind.
 std::string toString(ViewerAppKind kind);
@@ -26,11 +26,12 @@ struct StepResult {
   bool settled = false;   ///< nothing left to refine until the next change
 };
 
-/// One interactive app on a TexelDomain. Not thread-safe: the session calls it from its worker.
+/// One interactive app on a TexelDomain (filter, geodesic: refine towards a target after each
+/// change; react: a time stepper). Not thread-safe: the session calls it from its worker.
 class ViewerApp {
  public:
   virtual ~ViewerApp() = default;
-  /// "filter" or "geodesic".
+  /// "filter", "geodesic", "react" or "lic".
   virtual std::string name() const = 0;
   /// Applies a state-changing message (source, parameters, brush, reset); throws ProtocolError
   /// for a message this app does not take.
@@ -54,13 +55,20 @@ struct ViewerAppOptions {
   /// Geodesic screening weight of the diffusion step (heat time 1 / alpha on the unit-area
   /// surface, paper §7.3); GeodesicOptions::alpha.
   double geodesicAlpha = 1e3;
+  /// Reaction-diffusion preset (parseReactionPreset: "stripes" or "dots").
+  std::string reactPreset = "stripes";
+  /// Seed of the reaction-diffusion spots (reset reseeds with it).
+  uint64_t seed = 1;
   /// Throws InvalidInputError naming the first bad field.
   void validate() const;
 };
 
-/// Creates an app on `domain` (which must outlive it) for `texture` (filter input; the geodesic app
-/// only needs its size).
+/// Creates an app on `domain` (which must outlive it) for `texture` (filter input; the other apps
+/// only need its size). The lic app borrows the domain's operators while it sets up, so it needs
+/// the non-const overload; the const one throws InvalidInputError for it.
 std::unique_ptr<ViewerApp> makeViewerApp(ViewerAppKind kind, const TexelDomain& domain,
+                                         const Image& texture, const ViewerAppOptions& options);
+std::unique_ptr<ViewerApp> makeViewerApp(ViewerAppKind kind, TexelDomain& domain,
                                          const Image& texture, const ViewerAppOptions& options);
 
 /// Value of per-texel image `values` (channel `channel`) at a surface point: bilinear over the

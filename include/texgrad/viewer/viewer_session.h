@@ -22,7 +22,7 @@ namespace texgrad::viewer {
 struct SessionOptions {
   /// Upper bound on solver steps (and frames) per second; the page cannot show more.
   double maxUpdatesPerSecond = 60.0;
-  /// Steps after a change beyond which the worker idles even if not settled.
+  /// Steps after a change (or after Start) beyond which the worker idles even if not settled.
   int maxIterations = 400;
   /// Where "save" writes (empty: saving is refused with an error reply).
   std::filesystem::path savePath;
@@ -41,6 +41,7 @@ struct SessionState {
   double residual = 0.0;
   double updatesPerSecond = 0.0;  ///< solver steps per second while running (moving average)
   double lastStepSeconds = 0.0;
+  double lastFrameSeconds = 0.0;  ///< encoding the last frame (app texels + header), worker side
   std::string error;  ///< why the last step failed (the worker then pauses), empty if none
 };
 
@@ -100,6 +101,7 @@ class ViewerSession {
   bool stopping_ = false;
   bool dirty_ = true;       ///< something changed since the app settled
   int stepsRequested_ = 0;  ///< explicit single steps while paused
+  uint32_t iterationLimit_ = 0;  ///< iteration at which the worker idles (Start extends it)
   SessionState state_;
   SharedBytes frame_;
   std::thread worker_;
