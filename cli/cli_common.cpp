@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <new>
@@ -95,6 +96,33 @@ const CLI::Validator& resolutionValidator() {
         }
       },
       "WxH", "resolution");
+  return validator;
+}
+
+namespace {
+
+/// A validator accepting finite numbers above `minimum` (or equal to it when `inclusive`).
+CLI::Validator numberValidator(double minimum, bool inclusive, const std::string& name) {
+  const std::string bound = (inclusive ? ">= " : "> ") + CLI::detail::to_string(minimum);
+  return CLI::Validator(
+      [=](std::string& value) -> std::string {
+        double number = 0.0;
+        const bool parsed = CLI::detail::lexical_cast(value, number) && std::isfinite(number);
+        if (parsed && (number > minimum || (inclusive && number == minimum))) return {};
+        return "must be a number " + bound + ", got " + value;
+      },
+      name, name);
+}
+
+}  // namespace
+
+const CLI::Validator& positiveValidator() {
+  static const CLI::Validator validator = numberValidator(0.0, false, "POSITIVE");
+  return validator;
+}
+
+const CLI::Validator& nonNegativeValidator() {
+  static const CLI::Validator validator = numberValidator(0.0, true, "NONNEGATIVE");
   return validator;
 }
 

@@ -33,6 +33,11 @@ std::pair<int, int> parseResolution(const std::string& text);
 /// A CLI11 validator for "WxH" / "N" resolutions.
 const CLI::Validator& resolutionValidator();
 
+/// CLI11 validators for finite numbers > 0 and >= 0, with a short message ("must be a number
+/// > 0, got -1") instead of CLI11's range dump.
+const CLI::Validator& positiveValidator();
+const CLI::Validator& nonNegativeValidator();
+
 /// Progress callback drawing a bar on stderr when it is a terminal (nothing otherwise).
 ProgressCallback terminalProgress(bool enabled);
 

@@ -1,5 +1,6 @@
 // `texgrad geodesic`: heat-method geodesic distances from source points, written as a texture
 // (paper Sec. 7.3).
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
@@ -17,6 +18,9 @@ namespace {
 
 /// Resolution when the mesh names no texture to take the size from.
 constexpr int kDefaultResolution = 1024;
+/// A --source-uv farther than this many texels from every chart is refused, not snapped: it
+/// names no point of the surface (points in a chart's gutter or on its edge are still snapped).
+constexpr double kMaxUvSnapTexels = 2.0;
 
 struct GeodesicArgs {
   std::string mesh, out, png, resolution, offset = "near-field", boundary = "average";
@@ -82,6 +86,32 @@ std::pair<int, int> chooseResolution(const GeodesicArgs& args, const TexturedMes
   }
 }
 
+/// "U,V" as the user would type it.
+std::string uvText(const Eigen::Vector2d& uv) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.6g,%.6g", uv.x(), uv.y());
+  return text;
+}
+
+/// Throws InvalidInputError for a UV source more than kMaxUvSnapTexels from every chart.
+void requireUvSourcesOnCharts(const TexelDomain& domain, const std::vector<GeodesicSource>& sources,
+                              const std::string& meshName) {
+  const TexelGrid& grid = domain.grid();
+  const double texel = 1.0 / std::min(grid.imageWidth, grid.imageHeight);  // UV units
+  for (const GeodesicSource& s : sources) {
+    if (s.kind != GeodesicSource::Kind::Uv) continue;
+    const ResolvedSource r = resolveSource(domain, s);
+    if (r.snapDistance <= kMaxUvSnapTexels * texel) continue;
+    char distance[32];
+    std::snprintf(distance, sizeof distance, "%.0f", r.snapDistance / texel);
+    throw InvalidInputError("--source-uv " + uvText(s.uv) + " lies outside every chart of " +
+                            meshName + " (nearest chart point at UV " + uvText(r.uv) + ", " +
+                            distance +
+                            " texels away); pick a UV inside a chart (`texgrad mask` "
+                            "shows them) or use --source-point");
+  }
+}
+
 nlohmann::json vectorJson(const Eigen::Vector2d& v) {
   return {v.x(), v.y()};
 }
@@ -107,6 +137,7 @@ void runGeodesic(GeodesicArgs args) {
   const auto [width, height] = chooseResolution(args, mesh);
   timer.lap("read");
   const TexelDomain domain(std::move(mesh), width, height, {}, progress);
+  requireUvSourcesOnCharts(domain, sources, args.mesh);
   timer.lap("operators");
   reportProgress(progress, "geodesic", 0.0);
   const GeodesicResult result = geodesicDistance(domain, sources, args.options);
@@ -186,8 +217,10 @@ void addGeodesicCommand(CLI::App& app) {
                   "Source at a mesh vertex (0-based index into the file's positions); repeatable")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  cmd->add_option("--source-uv", args->sourceUvs,
-                  "Source at texture coordinates U,V (snapped to the nearest chart); repeatable")
+  cmd->add_option(
+         "--source-uv", args->sourceUvs,
+         "Source at texture coordinates U,V (snapped to the nearest chart; refused if more "
+         "than 2 texels outside every chart); repeatable")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--source-point", args->sourcePoints,
@@ -202,7 +235,7 @@ void addGeodesicCommand(CLI::App& app) {
                   "follows the surface more tightly near the source, smaller smooths the distance "
                   "and loses precision far away; paper default 1e3")
       ->default_val(1e3)
-      ->check(CLI::PositiveNumber);
+      ->check(positiveValidator());
   cmd->add_option("--offset", args->offset,
                   "How the distance constant is fixed: near-field (match the straight-line "
                   "distance 2-4 texels from each source; removes a ~0.4-texel bias) or source "

@@ -43,12 +43,14 @@ void runLic(LicArgs args) {
   const auto [width, height] = parseResolution(args.resolution);
   const ProgressCallback progress = terminalProgress(!args.report.quiet);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  reportProgress(progress, "lic field", 0.0);
   const FaceVectorField field = loadField(args, mesh);
+  reportProgress(progress, "lic field", 1.0);
   timer.lap("read");
   TexelDomain domain(std::move(mesh), width, height, {}, progress);
   timer.lap("operators");
   const auto fieldTexel = fieldInTexelCoordinates(domain.mesh(), domain.grid(), field);
-  const LicResult result = lineIntegralConvolution(domain, fieldTexel, args.options);
+  const LicResult result = lineIntegralConvolution(domain, fieldTexel, args.options, progress);
   timer.lap("solve");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
   writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth);
@@ -68,6 +70,7 @@ void runLic(LicArgs args) {
                {"zero_field_faces", result.report.zeroFieldFaces},
                {"solver", toString(args.options.solver.kind)},
                {"setup_seconds", result.report.setupSeconds},
+               {"solver_setup_seconds", result.report.solverSetupSeconds},
                {"diffusion", toJson(result.report.diffusion)},
                {"sharpening", toJson(result.report.sharpening)},
                {"stages", timer.json()},
@@ -121,21 +124,21 @@ void addLicCommand(CLI::App& app) {
                   "about 1/sqrt(epsilon) times longer than wide; smaller = streakier, harder "
                   "to solve")
       ->default_val(1e-4)
-      ->check(CLI::PositiveNumber);
+      ->check(positiveValidator());
   cmd->add_option("--alpha", args->options.alpha,
                   "Screening weight of the diffusion: smaller = longer streaks (length ~ "
                   "epsilon^-1/4 / sqrt(alpha) on the unit-area surface)")
       ->default_val(1e4)
-      ->check(CLI::PositiveNumber);
+      ->check(positiveValidator());
   cmd->add_option("--sharpen", args->options.sharpenBeta,
                   "Gradient gain of the sharpening step that restores contrast across streaks; "
                   "1 = no sharpening")
       ->default_val(100.0)
-      ->check(CLI::NonNegativeNumber);
+      ->check(nonNegativeValidator());
   cmd->add_option("--sharpen-alpha", args->options.sharpenAlpha,
                   "Screening weight of the sharpening: larger = only finer detail is boosted")
       ->default_val(1e4)
-      ->check(CLI::PositiveNumber);
+      ->check(positiveValidator());
   cmd->add_flag("--color,--colour", args->colour,
                 "Colour noise (random hues) instead of grey noise");
   cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: 8)");

@@ -1,5 +1,6 @@
 // `texgrad react`: a Gray–Scott reaction-diffusion pattern grown on the surface, in the atlas.
 #include <iostream>
+#include <string>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -18,6 +19,21 @@ struct ReactArgs {
   ReportArgs report;
   double weldTolerance = 0.0;
 };
+
+/// Largest --steps accepted.
+constexpr long long kMaxSteps = 100000000;
+
+/// Accepts whole numbers from 0 to kMaxSteps, with a message naming what is wrong.
+const CLI::Validator& stepCountValidator() {
+  static const CLI::Validator validator(
+      [](std::string& value) -> std::string {
+        long long steps = -1;
+        if (CLI::detail::lexical_cast(value, steps) && steps >= 0 && steps <= kMaxSteps) return {};
+        return "must be a whole number from 0 to " + std::to_string(kMaxSteps) + ", got " + value;
+      },
+      "STEPS", "step count");
+  return validator;
+}
 
 void runReact(ReactArgs args) {
   StageTimer timer;
@@ -83,16 +99,16 @@ void addReactCommand(CLI::App& app) {
          "--steps", args->steps,
          "Time steps (dt = --time-step); more lets the pattern fill the surface and settle")
       ->default_val(3000)
-      ->check(CLI::Range(0, 100000000));
+      ->check(stepCountValidator());
   cmd->add_option("--time-step", args->options.timeStep,
                   "dt in Pearson's time units; diffusion is implicit, reaction explicit (keep "
                   "<= 1 for accuracy)")
       ->default_val(1.0)
-      ->check(CLI::PositiveNumber);
+      ->check(positiveValidator());
   cmd->add_option("--scale", args->patternScale,
                   "Pattern size multiplier (diffusion rates scale with its square)")
       ->default_val(1.0)
-      ->check(CLI::PositiveNumber);
+      ->check(positiveValidator());
   cmd->add_option("--seed", args->options.seed,
                   "Seed of the initial spots (same seed, same pattern)")
       ->default_val(1);

@@ -14,6 +14,10 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.option_defaults()->always_capture_default(true);  // --help shows every default
   app.fallthrough(false);
+  // A bad flag is one line on stderr, like every other error (cli_common.cpp:runGuarded).
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return "texgrad: error: " + std::string(e.what()) + " (see --help)\n";
+  });
   texgrad::cli::addInfoCommand(app);
   texgrad::cli::addMaskCommand(app);
   texgrad::cli::addDilateCommand(app);

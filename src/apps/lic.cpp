@@ -216,6 +216,7 @@ LineIntegralConvolution::LineIntegralConvolution(TexelDomain& domain,
   }
   ops.setMetric(g);
 
+  const auto solverStart = std::chrono::steady_clock::now();
   s.diffusion.init(system);
   s.diffusion.update(system);
   if (s.sharpens()) {
@@ -225,6 +226,7 @@ LineIntegralConvolution::LineIntegralConvolution(TexelDomain& domain,
     s.sharpening->init(sharpenSystem);
     s.sharpening->update(sharpenSystem);
   }
+  s.setup.solverSetupSeconds = secondsSince(solverStart);
   s.setup.setupSeconds = secondsSince(start);
 }
 
@@ -280,11 +282,15 @@ Eigen::MatrixXd licContrast(const Eigen::MatrixXd& values, const Eigen::VectorXd
 
 LicResult lineIntegralConvolution(TexelDomain& domain,
                                   const std::vector<Eigen::Vector2d>& fieldTexel,
-                                  const LicOptions& options) {
+                                  const LicOptions& options, const ProgressCallback& progress) {
+  reportProgress(progress, "lic setup", 0.0);
   LineIntegralConvolution lic(domain, fieldTexel, options);
+  reportProgress(progress, "lic setup", 1.0);
+  reportProgress(progress, "lic solve", 0.0);
   LicResult result;
   result.values =
       lic.convolve(licNoise(domain.grid(), options.channels, options.seed), &result.report);
+  reportProgress(progress, "lic solve", 1.0);
   const TexelGrid& grid = domain.grid();
   result.image = Image(grid.imageWidth, grid.imageHeight, options.channels, PixelFormat::UInt8);
   const Eigen::VectorXd area = domain.operators().mass() * Eigen::VectorXd::Ones(domain.unknowns());

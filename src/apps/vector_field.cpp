@@ -70,13 +70,22 @@ bool degenerateGram(const Eigen::Matrix2d& gram) {
   return !(trace > 0.0) || gram.determinant() <= kDegenerateGram * trace * trace;
 }
 
-/// Area-weighted vertex normals (unit; zero at vertices whose faces are all degenerate).
+/// Vertex normals with Max's weights (J. Graphics Tools 4(2), 1999): each face adds
+/// (a x b) / (|a|^2 |b|^2) for its two edges a, b at the vertex, which is exact when the ring
+/// lies on a sphere; area weights are not, and their O(1) error in the normal differences makes
+/// the shape operator fit below inconsistent on irregular meshes. Unit; zero at vertices whose
+/// faces are all degenerate.
 std::vector<Eigen::Vector3d> vertexNormals(const TexturedMesh& mesh) {
   std::vector<Eigen::Vector3d> normals(mesh.positions.size(), Eigen::Vector3d::Zero());
   for (size_t f = 0; f < mesh.faceCount(); ++f) {
-    const Eigen::Matrix<double, 3, 2> e = edges3d(mesh, f);
-    const Eigen::Vector3d n = e.col(0).cross(e.col(1));
-    for (int32_t v : mesh.triangles[f]) normals[v] += n;
+    const Triangle& tri = mesh.triangles[f];
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector3d& p = mesh.positions[tri[c]];
+      const Eigen::Vector3d a = mesh.positions[tri[(c + 1) % 3]] - p;
+      const Eigen::Vector3d b = mesh.positions[tri[(c + 2) % 3]] - p;
+      const double weight = a.squaredNorm() * b.squaredNorm();
+      if (weight > 0.0) normals[tri[c]] += a.cross(b) / weight;
+    }
   }
   for (auto& n : normals) {
     const double length = n.norm();

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -11,6 +12,7 @@
 
 #include "test_paths.h"
 #include "texgrad/apps/lic.h"
+#include "texgrad/apps/texel_signal.h"
 #include "texgrad/apps/vector_field.h"
 #include "texgrad/atlas/seam_jump.h"
 #include "texgrad/core/error.h"
@@ -88,6 +90,70 @@ TEST(Lic, DiffusionAloneIsSmoothAlongAndRoughAcross) {
               x.alongX / std::abs(x.alongY));
   EXPECT_GT(x.alongX, 0.9);
   EXPECT_GT(x.alongX, 5.0 * std::abs(x.alongY));
+}
+
+/// Autocorrelation length of channel 0 along the grid step (dx, dy), in steps: the first lag at
+/// which the autocorrelation falls to 1/e, interpolated linearly between lags; maxLag if it never
+/// does (a lower bound).
+double correlationLength(const TexelGrid& grid, const Eigen::MatrixXd& values, int dx, int dy,
+                         int maxLag) {
+  const double threshold = std::exp(-1.0);
+  double previous = 1.0;  // rho(0)
+  for (int lag = 1; lag <= maxLag; ++lag) {
+    const double rho = autocorrelation(grid, values, lag * dx, lag * dy);
+    if (rho <= threshold) return lag - 1 + (previous - threshold) / (previous - rho);
+    previous = rho;
+  }
+  return maxLag;
+}
+
+/// Largest relative deviation of the per-face metrics from one common multiple of the identity:
+/// 0 when texel units are surface units up to a single scale (an isometric chart).
+double isometryDefect(const std::vector<Eigen::Matrix2d>& g) {
+  double scale = 0.0;
+  for (const Eigen::Matrix2d& m : g) scale += 0.5 * m.trace();
+  scale /= static_cast<double>(g.size());
+  double worst = 0.0;
+  for (const Eigen::Matrix2d& m : g)
+    worst = std::max(worst, (m - scale * Eigen::Matrix2d::Identity()).norm() / scale);
+  return worst;
+}
+
+TEST(Lic, CylinderStreaksAlongTheAxisSameFromMultigridCgAndDirect) {
+  // The cylinder's chart is isometric up to scale, so texel lags are surface lengths: the
+  // output's correlation length along the axis field must be >= 5x the one around the cylinder.
+  TexelDomain domain(procedural::cylinder(48, 24), 128, 128);
+  const TexelGrid& grid = domain.grid();
+  ASSERT_LT(isometryDefect(domain.operators().metric()), 0.01);
+  const auto field =
+      fieldInTexelCoordinates(domain.mesh(), grid, constantField(domain.mesh(), {0, 0, 1}));
+  for (const Eigen::Vector2d& v : field) ASSERT_LT(std::abs(v.x()), 1e-9 * v.norm());
+  constexpr int kMaxLag = 40;
+  LicOptions direct;
+  direct.solver.kind = SolverKind::Direct;
+  const LicResult cg = lineIntegralConvolution(domain, field, {});
+  const LicResult exact = lineIntegralConvolution(domain, field, direct);
+  for (const LicResult* r : {&cg, &exact}) {
+    const char* name = r == &cg ? "MG-PCG" : "direct";
+    const Eigen::MatrixXd output = gatherTexels(grid, r->image);  // what the user gets
+    const double along = correlationLength(grid, output, 0, 1, kMaxLag);
+    const double across = correlationLength(grid, output, 1, 0, kMaxLag);
+    std::printf(
+        "cylinder LIC (%s): correlation length along the axis %.2f texels, around %.2f, "
+        "ratio %.1f\n",
+        name, along, across, along / across);
+    EXPECT_GE(along, 5.0 * across) << name;
+  }
+  EXPECT_TRUE(cg.report.diffusion.converged);
+  EXPECT_TRUE(cg.report.sharpening.converged);
+  const double rms =
+      std::sqrt((gatherTexels(grid, cg.image) - gatherTexels(grid, exact.image)).squaredNorm() /
+                static_cast<double>(domain.unknowns()));
+  std::printf(
+      "cylinder LIC: MG-PCG %d + %d iterations; output RMS difference to direct %.2e "
+      "(%.3f / 255)\n",
+      cg.report.diffusion.iterations, cg.report.sharpening.iterations, rms, 255.0 * rms);
+  EXPECT_LE(rms, 1.0 / 255.0);
 }
 
 double relativeDifference(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {

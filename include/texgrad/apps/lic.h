@@ -9,6 +9,7 @@
 
 #include "texgrad/apps/system_solver.h"
 #include "texgrad/apps/texel_domain.h"
+#include "texgrad/core/progress.h"
 #include "texgrad/io/image.h"
 #include "texgrad/solver/solve_report.h"
 
@@ -70,7 +71,10 @@ struct LicReport {
   SolveReport diffusion;      ///< anisotropic diffusion solve
   SolveReport sharpening;     ///< sharpening solve (empty when sharpenBeta == 1)
   double setupSeconds = 0.0;  ///< metric, assembly, solver init and update of both systems
-  int zeroFieldFaces = 0;     ///< faces with positive UV area where the field vanishes
+  /// The part of setupSeconds spent in init and update of the two solvers (for Direct: the
+  /// CHOLMOD factorisations; for MultigridCg: the hierarchies and coarse factorisations).
+  double solverSetupSeconds = 0.0;
+  int zeroFieldFaces = 0;  ///< faces with positive UV area where the field vanishes
 };
 
 /// Stateful LIC for one domain and field: both systems are assembled and their solvers set up
@@ -115,9 +119,10 @@ struct LicResult {
 Eigen::MatrixXd licContrast(const Eigen::MatrixXd& values, const Eigen::VectorXd& weights,
                             double contrast);
 
-/// One-shot LIC: noise from options.seed, diffusion, sharpening, contrast, image.
+/// One-shot LIC: noise from options.seed, diffusion, sharpening, contrast, image. Reports the
+/// stages "lic setup" and "lic solve" (0 and 1 each) to `progress`, which may cancel.
 LicResult lineIntegralConvolution(TexelDomain& domain,
                                   const std::vector<Eigen::Vector2d>& fieldTexel,
-                                  const LicOptions& options);
+                                  const LicOptions& options, const ProgressCallback& progress = {});
 
 }  // namespace texgrad

@@ -69,8 +69,8 @@ struct PrincipalCurvatures {
   std::vector<Eigen::Vector3d> dirMajor, dirMinor;
 };
 
-/// Estimates the shape operator per face from the differences of area-weighted vertex normals
-/// along its edges (least squares over the three edges, Rusinkiewicz 2004), smooths it
+/// Estimates the shape operator per face from the differences of vertex normals (Max 1999
+/// weights) along its edges (least squares over the three edges, Rusinkiewicz 2004), smooths it
 /// (CurvatureOptions) and decomposes it.
 PrincipalCurvatures principalCurvatures(const TexturedMesh& mesh,
                                         const CurvatureOptions& options = {});
