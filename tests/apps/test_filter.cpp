@@ -172,7 +172,7 @@ INSTANTIATE_TEST_SUITE_P(
         NormalMapped{"Lantern", "Lantern/glTF/Lantern.gltf", "Lantern/glTF/Lantern_normal.png"},
         NormalMapped{"WaterBottle", "WaterBottle/glTF/WaterBottle.gltf",
                      "WaterBottle/glTF/WaterBottle_normal.png"}),
-    [](const ::testing::TestParamInfo<NormalMapped>& info) { return info.param.name; });
+    [](const ::testing::TestParamInfo<NormalMapped>& p) { return p.param.name; });
 
 /// Smoothing and sharpening each shared mesh's own texture (at most 512 across).
 class SharedFilterJumpSlow : public ::testing::TestWithParam<test::SharedMesh> {};

@@ -83,7 +83,9 @@ TEST(GainCompensation, StitchingRemovesAPerChannelGainBetweenSources) {
   for (int j = 0; j < 128; ++j)
     for (int i = 0; i < 128; ++i)
       for (int c = 0; c < 3; ++c)
-        base.at(i, j, c) = 0.4f + 0.15f * std::sin(0.11f * i + c) * std::cos(0.07f * j - c);
+        base.at(i, j, c) =
+            0.4f + 0.15f * std::sin(0.11f * static_cast<float>(i) + static_cast<float>(c)) *
+                       std::cos(0.07f * static_cast<float>(j) - static_cast<float>(c));
   const std::array<float, 3> g{1.6f, 1.3f, 0.8f};
   Image composite = base, segments(128, 128, 1);
   for (int j = 0; j < 128; ++j)
