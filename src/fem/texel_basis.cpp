@@ -5,12 +5,19 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <tuple>
 
 #include "texgrad/core/error.h"
 
 namespace texgrad::fem {
+namespace {
+
+/// Seam parameters closer than this are one point (a few ulps of parameters in [0, 1]).
+constexpr double kSameParameter = 64.0 * std::numeric_limits<double>::epsilon();
+
+}  // namespace
 
 void TexelBasisOptions::validate() const {
   if (kind != BasisKind::SeamContinuous && kind != BasisKind::Bilinear)
@@ -82,11 +89,14 @@ void TexelBasis::buildSeams(const Atlas& atlas) {
     size_t i = 0, j = 0;
     auto bIndex = [&](size_t k) { return same ? k : nb - 1 - k; };
     auto bParam = [&](size_t k) { return same ? own[1][bIndex(k)].t : 1.0 - own[1][bIndex(k)].t; };
+    // Crossings within kSameParameter are one event (e.g. both sides crossing the same lattice
+    // line at the same parameter up to rounding): two events there would give zero-length
+    // polygon edges and degenerate fan elements.
     while (i < own[0].size() || j < nb) {
-      if (j == nb || (i < own[0].size() && own[0][i].t < bParam(j))) {
+      if (j == nb || (i < own[0].size() && own[0][i].t < bParam(j) - kSameParameter)) {
         merged.emplace_back(own[0][i].t, static_cast<int>(i), -1);
         ++i;
-      } else if (i == own[0].size() || bParam(j) < own[0][i].t) {
+      } else if (i == own[0].size() || bParam(j) < own[0][i].t - kSameParameter) {
         merged.emplace_back(bParam(j), -1, static_cast<int>(bIndex(j)));
         ++j;
       } else {
@@ -333,134 +343,6 @@ void TexelBasis::buildPieceBasis(int face, std::span<const PieceVertex> polygon,
     fill(r + 4, nodes[1 + 2 * n + i]);
     fill(r + 5, nodes[1 + n + j]);
   }
-}
-
-Eigen::Vector3d TexelBasis::barycentric(const SurfacePoint& point) const {
-  const auto& c = corners_[point.face];
-  Eigen::Matrix2d m;
-  m.col(0) = c[1] - c[0];
-  m.col(1) = c[2] - c[0];
-  const Eigen::Vector2d st = m.inverse() * (point.grid - c[0]);
-  return {1.0 - st.x() - st.y(), st.x(), st.y()};
-}
-
-Eigen::Vector3d TexelBasis::position(const SurfacePoint& point) const {
-  const Eigen::Vector3d b = barycentric(point);
-  const auto& tri = mesh_.triangles[point.face];
-  return b[0] * mesh_.positions[tri[0]] + b[1] * mesh_.positions[tri[1]] +
-         b[2] * mesh_.positions[tri[2]];
-}
-
-namespace {
-
-/// Smallest signed distance-like value of p to the edges of a CCW convex polygon (>= 0 inside).
-double insideness(std::span<const PieceVertex> polygon, const Eigen::Vector2d& p) {
-  double worst = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i < polygon.size(); ++i) {
-    const Eigen::Vector2d a = polygon[i].p, b = polygon[(i + 1) % polygon.size()].p;
-    const Eigen::Vector2d e = b - a;
-    const double len = e.norm();
-    if (len == 0.0) continue;
-    worst = std::min(worst, (e.x() * (p.y() - a.y()) - e.y() * (p.x() - a.x())) / len);
-  }
-  return worst;
-}
-
-Eigen::Vector3d elementBarycentric(const std::array<Eigen::Vector2d, 3>& t,
-                                   const Eigen::Vector2d& p) {
-  Eigen::Matrix2d m;
-  m.col(0) = t[1] - t[0];
-  m.col(1) = t[2] - t[0];
-  const Eigen::Vector2d st = m.inverse() * (p - t[0]);
-  return {1.0 - st.x() - st.y(), st.x(), st.y()};
-}
-
-}  // namespace
-
-std::vector<TexelWeight> TexelBasis::evaluate(const SurfacePoint& point) const {
-  std::vector<TexelWeight> result;
-  if (point.face < 0 || point.face >= faceCount() || !valid_[point.face]) return result;
-  FaceClip clip;
-  clipFace(point.face, clip);
-  const FacePiece* best = nullptr;
-  double bestInside = -std::numeric_limits<double>::infinity();
-  for (const auto& piece : clip.pieces) {
-    const double inside = insideness(clip.polygon(piece), point.grid);
-    if (inside > bestInside) {
-      bestInside = inside;
-      best = &piece;
-    }
-  }
-  if (!best) return result;
-  const auto polygon = clip.polygon(*best);
-  if (isPlain(point.face, polygon)) {
-    const double fx = point.grid.x() - best->cellX, fy = point.grid.y() - best->cellY;
-    const std::array<double, 4> w{(1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy,
-                                  fx * fy};
-    const auto texels = cellTexels(best->cellX, best->cellY);
-    for (int k = 0; k < 4; ++k)
-      if (texels[k] >= 0) result.push_back({texels[k], w[k]});
-    mergeWeights(result);
-    return result;
-  }
-  PieceBasis basis;
-  buildPieceBasis(point.face, polygon, basis);
-  size_t element = 0;
-  Eigen::Vector3d bestB = Eigen::Vector3d::Zero();
-  double bestMin = -std::numeric_limits<double>::infinity();
-  for (size_t e = 0; e < basis.elements.size(); ++e) {
-    const Eigen::Vector3d b = elementBarycentric(basis.elements[e], point.grid);
-    if (b.minCoeff() > bestMin) {
-      bestMin = b.minCoeff();
-      bestB = b;
-      element = e;
-    }
-  }
-  const auto shape = quadraticShape(bestB);
-  for (size_t t = 0; t < basis.texels.size(); ++t) {
-    double value = 0.0;
-    for (int k = 0; k < 6; ++k)
-      value += shape[k] * basis.coefficients(static_cast<Eigen::Index>(6 * element + k),
-                                             static_cast<Eigen::Index>(t));
-    result.push_back({basis.texels[t], value});
-  }
-  mergeWeights(result);
-  return result;
-}
-
-double TexelBasis::evaluate(const SurfacePoint& point, const Eigen::VectorXd& x) const {
-  double sum = 0.0;
-  for (const auto& w : evaluate(point)) sum += w.weight * x[w.unknown];
-  return sum;
-}
-
-SurfacePoint TexelBasis::randomPoint(std::mt19937_64& rng) const {
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const double target = unit(rng) * cumulativeArea_.back();
-  int face = static_cast<int>(std::upper_bound(cumulativeArea_.begin(), cumulativeArea_.end(),
-                                               target) - cumulativeArea_.begin()) - 1;
-  face = std::clamp(face, 0, faceCount() - 1);
-  while (!valid_[face]) face = (face + 1) % faceCount();
-  double s = unit(rng), t = unit(rng);
-  if (s + t > 1.0) {
-    s = 1.0 - s;
-    t = 1.0 - t;
-  }
-  const auto& c = corners_[face];
-  return {face, c[0] + s * (c[1] - c[0]) + t * (c[2] - c[0])};
-}
-
-std::pair<SurfacePoint, SurfacePoint> TexelBasis::randomSeamPair(std::mt19937_64& rng) const {
-  if (seams_.empty()) throw InvalidInputError("the atlas has no seams to sample");
-  std::uniform_int_distribution<size_t> pick(0, seams_.size() - 1);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const SeamSplit& s = seams_[pick(rng)];
-  const double t = unit(rng);
-  auto at = [&](const FaceEdge& e, double u) {
-    const Eigen::Vector2d a = corners_[e.face][e.corner], b = corners_[e.face][(e.corner + 1) % 3];
-    return SurfacePoint{e.face, a + u * (b - a)};
-  };
-  return {at(s.edge[0], t), at(s.edge[1], s.sameDirection ? t : 1.0 - t)};
 }
 
 }  // namespace texgrad::fem

@@ -12,8 +12,13 @@
 
 namespace texgrad::detail {
 
-/// m[3a + b] = int x^a y^b over the polygon, in cell-local coordinates (cell corner at origin).
-using Moments = std::array<double, 9>;
+/// m[3a + b] = int (x - ox)^a (y - oy)^b over the polygon, in cell-local coordinates (cell
+/// corner at 0). The origin (ox, oy) is a point of the piece, so that bilinear products of tiny
+/// pieces far from a texel do not cancel catastrophically (their integrals stay >= 0).
+struct Moments {
+  std::array<double, 9> m{};
+  double ox = 0.0, oy = 0.0;
+};
 
 /// Local matrices on k texels (k x k, column-major): mass int phi_s phi_t and the three stiffness
 /// parts int dx phi_s dx phi_t, int (dx phi_s dy phi_t + dy phi_s dx phi_t), int dy phi_s dy phi_t.

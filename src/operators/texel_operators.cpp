@@ -17,14 +17,39 @@ namespace {
 
 constexpr int kBandRows = 8;  ///< cell rows per assembly band (two bands apart never share a row)
 
+/// Appends the upper triangle of a symmetric k x k matrix, column by column (k (k + 1) / 2 values).
+void appendUpperTriangle(const Eigen::MatrixXd& m, std::vector<double>& out) {
+  for (Eigen::Index c = 0; c < m.cols(); ++c)
+    for (Eigen::Index r = 0; r <= c; ++r) out.push_back(m(r, c));
+}
+
+/// Read access (r, c) to a symmetric matrix stored by appendUpperTriangle.
+struct PackedSymmetric {
+  const double* values;
+  double operator()(int r, int c) const {
+    return r <= c ? values[c * (c + 1) / 2 + r] : values[r * (r + 1) / 2 + c];
+  }
+};
+
 
 }  // namespace
 
 void OperatorOptions::validate() const {
   if (facesPerTask < 1) throw InvalidInputError("OperatorOptions.facesPerTask must be >= 1");
+  if (!(seamContinuityWeight >= 0.0) || !std::isfinite(seamContinuityWeight))
+    throw InvalidInputError("OperatorOptions.seamContinuityWeight must be finite and >= 0");
+  if (seamContinuityWeight != 0.0 && basis != fem::BasisKind::Bilinear)
+    throw InvalidInputError(
+        "OperatorOptions.seamContinuityWeight applies to the Bilinear basis only (the "
+        "seam-continuous basis has no seam jumps to penalise); set it to 0 or choose Bilinear");
 }
 
 int TexelOperators::Impl::band(int cellY) const { return (cellY + 1) / kBandRows; }
+
+void TexelOperators::Impl::resetToPattern(SparseMatrixd& out) const {
+  if (&out != &mass) out = mass;  // copy-assignment: one allocation, no temporary
+  std::fill(out.valuePtr(), out.valuePtr() + out.nonZeros(), 0.0);
+}
 
 void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
   const int faces = basis.faceCount();
@@ -64,7 +89,7 @@ void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
         chunk.texels.insert(chunk.texels.end(), pb.texels.begin(), pb.texels.end());
         sp.texelEnd = static_cast<int32_t>(chunk.texels.size());
         for (const Eigen::MatrixXd* m : {&li.mass, &li.kxx, &li.kxy, &li.kyy})
-          chunk.values.insert(chunk.values.end(), m->data(), m->data() + m->size());
+          appendUpperTriangle(*m, chunk.values);
         chunk.seam.push_back(sp);
       }
     }
@@ -144,11 +169,12 @@ void TexelOperators::Impl::buildPattern() {
     inner.insert(inner.end(), column.begin(), column.end());
     outer[u + 1] = static_cast<int32_t>(inner.size());
   }
-  pattern.resize(n, n);
-  pattern.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
-  std::copy(outer.begin(), outer.end(), pattern.outerIndexPtr());
-  std::copy(inner.begin(), inner.end(), pattern.innerIndexPtr());
-  std::fill(pattern.valuePtr(), pattern.valuePtr() + inner.size(), 0.0);
+  // The mass matrix holds the shared pattern (no separate copy: it is the largest structure).
+  mass.resize(n, n);
+  mass.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
+  std::copy(outer.begin(), outer.end(), mass.outerIndexPtr());
+  std::copy(inner.begin(), inner.end(), mass.innerIndexPtr());
+  std::fill(mass.valuePtr(), mass.valuePtr() + inner.size(), 0.0);
 }
 
 namespace {
@@ -174,10 +200,11 @@ void scatter(SparseMatrixd& m, const int32_t* texels, int k, const Local& local,
 }  // namespace
 
 void TexelOperators::Impl::assemble(const double* beta, SparseMatrixd* massOut,
-                                    SparseMatrixd* stiffnessOut) const {
+                                    SparseMatrixd* stiffnessOut) {
   const TexelGrid& grid = basis.grid();
-  if (massOut) *massOut = pattern;
-  if (stiffnessOut) *stiffnessOut = pattern;
+  // Stiffness first: it copies the pattern from `mass`, which may be re-assembled in place.
+  if (stiffnessOut) resetToPattern(*stiffnessOut);
+  if (massOut) resetToPattern(*massOut);
   static const detail::BilinearIntegrals unit = detail::bilinearIntegrals(detail::unitCellMoments());
   auto cellBeta = [&](int a, int b) { return beta ? beta[grid.cellIndex(a, b)] : 1.0; };
   auto plain = [&](int face, int a, int b, const detail::BilinearIntegrals& in) {
@@ -199,16 +226,20 @@ void TexelOperators::Impl::assemble(const double* beta, SparseMatrixd* massOut,
               detail::bilinearIntegrals(partial[i].moments));
     });
   }
+  std::vector<double> combined;
   for (const SeamPiece& sp : seam) {
     const int k = sp.texelEnd - sp.texelBegin;
     const FaceFactors& f = factors[sp.face];
     const double* v = seamValues.data() + sp.valueBegin;
-    using Map = Eigen::Map<const Eigen::MatrixXd>;
-    const Map localMass(v, k, k), kxx(v + k * k, k, k), kxy(v + 2 * k * k, k, k), kyy(v + 3 * k * k, k, k);
-    if (massOut) scatter(*massOut, seamTexels.data() + sp.texelBegin, k, localMass, f.mass);
+    const int packed = k * (k + 1) / 2;
+    if (massOut)
+      scatter(*massOut, seamTexels.data() + sp.texelBegin, k, PackedSymmetric{v}, f.mass);
     if (stiffnessOut) {
-      const Eigen::MatrixXd s = f.xx * kxx + f.xy * kxy + f.yy * kyy;
-      scatter(*stiffnessOut, seamTexels.data() + sp.texelBegin, k, s, cellBeta(sp.cellX, sp.cellY));
+      combined.resize(static_cast<size_t>(packed));
+      for (int i = 0; i < packed; ++i)
+        combined[i] = f.xx * v[packed + i] + f.xy * v[2 * packed + i] + f.yy * v[3 * packed + i];
+      scatter(*stiffnessOut, seamTexels.data() + sp.texelBegin, k, PackedSymmetric{combined.data()},
+              cellBeta(sp.cellX, sp.cellY));
     }
   }
 }
@@ -246,13 +277,22 @@ void TexelOperators::setMetric(std::vector<Eigen::Matrix2d> metric) {
   }
   impl_->metric = std::move(metric);
   impl_->assemble(nullptr, &impl_->mass, &impl_->stiffness);
+  impl_->buildSeamContinuity();
 }
 
 const std::vector<Eigen::Matrix2d>& TexelOperators::metric() const { return impl_->metric; }
 const SparseMatrixd& TexelOperators::mass() const { return impl_->mass; }
 const SparseMatrixd& TexelOperators::stiffness() const { return impl_->stiffness; }
+const SparseMatrixd& TexelOperators::seamContinuity() const { return impl_->seamContinuity; }
 const fem::TexelBasis& TexelOperators::basis() const { return impl_->basis; }
 const OperatorReport& TexelOperators::report() const { return impl_->report; }
+
+SparseMatrixd TexelOperators::screenedSystem(double alpha) const {
+  SparseMatrixd system = alpha * impl_->mass + impl_->stiffness;
+  if (impl_->options.seamContinuityWeight != 0.0)
+    system += (alpha * impl_->options.seamContinuityWeight) * impl_->seamContinuity;
+  return system;
+}
 
 SparseMatrixd TexelOperators::modulatedStiffness(std::span<const double> betaPerCell) const {
   const TexelGrid& grid = impl_->basis.grid();
@@ -265,7 +305,7 @@ SparseMatrixd TexelOperators::modulatedStiffness(std::span<const double> betaPer
 
 std::vector<std::pair<int32_t, int32_t>> TexelOperators::texelPairs() const {
   std::vector<std::pair<int32_t, int32_t>> pairs;
-  const SparseMatrixd& p = impl_->pattern;
+  const SparseMatrixd& p = impl_->mass;
   for (int s = 0; s < p.outerSize(); ++s)
     for (int k = p.outerIndexPtr()[s]; k < p.outerIndexPtr()[s + 1]; ++k)
       if (p.innerIndexPtr()[k] > s) pairs.emplace_back(s, p.innerIndexPtr()[k]);
@@ -280,7 +320,7 @@ SparseMatrixd TexelOperators::differential() const {
     triplets.emplace_back(static_cast<int>(a), pairs[a].first, -1.0);
     triplets.emplace_back(static_cast<int>(a), pairs[a].second, 1.0);
   }
-  SparseMatrixd d(static_cast<Eigen::Index>(pairs.size()), impl_->pattern.rows());
+  SparseMatrixd d(static_cast<Eigen::Index>(pairs.size()), impl_->mass.rows());
   d.setFromTriplets(triplets.begin(), triplets.end());
   return d;
 }

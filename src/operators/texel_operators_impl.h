@@ -1,5 +1,5 @@
 // State of TexelOperators (private to operators/): per-piece metric-independent integrals grouped
-// by cell-row band, the shared sparsity pattern, and the assembled matrices.
+// by cell-row band and the assembled matrices (which all share mass's sparsity pattern).
 #pragma once
 
 #include <memory>
@@ -20,7 +20,8 @@ struct TexelOperators::Impl {
     int32_t face, cellX, cellY;
     detail::Moments moments;
   };
-  /// Piece touching a seam: local texels and packed k x k integrals (mass, kxx, kxy, kyy).
+  /// Piece touching a seam: local texels and its four symmetric k x k integrals (mass, kxx, kxy,
+  /// kyy), each stored as its upper triangle (k (k + 1) / 2 values).
   struct SeamPiece {
     int32_t face, cellX, cellY;
     int32_t texelBegin, texelEnd;
@@ -37,8 +38,13 @@ struct TexelOperators::Impl {
 
   void integratePieces(const ProgressCallback& progress);
   void buildPattern();
-  void assemble(const double* beta, SparseMatrixd* mass, SparseMatrixd* stiffness) const;
+  /// C of the soft seam-continuity energy (zero for the seam-continuous basis).
+  void buildSeamContinuity();
+  void assemble(const double* beta, SparseMatrixd* mass, SparseMatrixd* stiffness);
   int band(int cellY) const;
+  /// Sets `out` to the shared sparsity pattern (that of `mass`, explicit zeros kept) with zero
+  /// values; `out` may be `mass` itself (then only the values are cleared).
+  void resetToPattern(SparseMatrixd& out) const;
 
   OperatorOptions options;
   fem::TexelBasis basis;
@@ -54,8 +60,8 @@ struct TexelOperators::Impl {
   std::vector<int64_t> fullBandBegin, partialBandBegin;
   int bandCount = 0;
   std::vector<uint8_t> cellCovered;  ///< per grid cell: some piece has positive area
-  SparseMatrixd pattern;             ///< shared structure (values zero)
   SparseMatrixd mass, stiffness;
+  SparseMatrixd seamContinuity;  ///< E_C(x) = x^T C x (paper Sec. 4.2)
 };
 
 }  // namespace texgrad

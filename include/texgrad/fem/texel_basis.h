@@ -20,7 +20,7 @@ namespace texgrad::fem {
 /// Which function space the texels span.
 enum class BasisKind : uint8_t {
   SeamContinuous,  ///< phi_t of paper Sec. 4.1: continuous across seams, partition of unity
-  Bilinear,        ///< B_t restricted to M (the Sec. 4.2 baseline; discontinuous across seams)
+  Bilinear,  ///< B_t restricted to M (Sec. 4.2 baseline, discontinuous across seams; see E_C)
 };
 
 /// Options of TexelBasis.
@@ -58,6 +58,14 @@ struct PieceBasis {
   /// Row 6 e + n: coefficients of node n of element e on the local texels; nodes 0..2 are the
   /// corners, 3..5 the midpoints of edges (0,1), (1,2), (2,0).
   Eigen::MatrixXd coefficients;
+};
+
+/// A seam as the basis splits it: its two face edges and the parameters (along side 0) where
+/// either side crosses a lattice line, so that between two breaks both sides stay in one cell.
+struct SeamTrace {
+  std::array<FaceEdge, 2> edge;  ///< side 0 and side 1 (from corner `corner` to the next)
+  bool sameDirection = false;    ///< parameter s on side 0 is s on side 1 (else 1 - s)
+  std::vector<double> breaks;    ///< ascending, from 0 to 1 inclusive
 };
 
 /// Quadratic Lagrange shape functions at barycentric coordinates b (node order of PieceBasis).
@@ -99,7 +107,13 @@ class TexelBasis {
   /// -1 for texels that are inactive or outside the grid.
   std::array<int32_t, 4> cellTexels(int a, int b) const;
 
-  /// phi_t(point) for every texel with a nonzero value, ascending by unknown.
+  /// Number of seams the basis joins (seams touching UV-degenerate faces are left out).
+  int seamCount() const { return static_cast<int>(seams_.size()); }
+  /// Seam i with its break parameters.
+  SeamTrace seamTrace(int seam) const;
+
+  /// phi_t(point) for every texel with a nonzero value, ascending by unknown. A point within
+  /// rounding of a face edge is evaluated on that edge (phi can be steep across thin seam pieces).
   std::vector<TexelWeight> evaluate(const SurfacePoint& point) const;
   /// sum_t x_t phi_t(point).
   double evaluate(const SurfacePoint& point, const Eigen::VectorXd& x) const;
@@ -119,6 +133,17 @@ class TexelBasis {
     bool sameDirection = false;
   };
   int seamSide(int face, int edge) const { return seamSideOfEdge_[3 * face + edge]; }
+  /// Where a point lies in its face's clip: a piece and, for points on a face edge, the
+  /// polygon segment (index of its first vertex) and the parameter along it.
+  struct Location {
+    const FacePiece* piece = nullptr;
+    int segment = -1;
+    double parameter = 0.0;
+  };
+  /// Face edge the point lies on up to rounding of its coordinates, or -1.
+  int edgeOfPoint(const SurfacePoint& point) const;
+  /// Piece (and edge segment) of the face's clip that holds the point.
+  Location locate(const SurfacePoint& point, const FaceClip& clip) const;
   Eigen::Vector2d partnerPoint(int seamSide, int index) const;
   int edgeIndex(int face, const PieceVertex& v, int edge) const;
   void vertexWeights(int face, const PieceVertex& v, std::vector<TexelWeight>& out) const;

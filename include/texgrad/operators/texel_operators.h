@@ -25,6 +25,10 @@ using SparseMatrixd = Eigen::SparseMatrix<double>;
 /// Options of TexelOperators.
 struct OperatorOptions {
   fem::BasisKind basis = fem::BasisKind::SeamContinuous;  ///< function space (paper Sec. 4)
+  /// lambda of paper Sec. 4.2: weight of the soft seam-continuity energy E_C in
+  /// screenedSystem() (alpha M + S + alpha lambda C). Only for the Bilinear basis (the
+  /// seam-continuous basis needs none); larger values pull the two sides of every seam together.
+  double seamContinuityWeight = 0.0;
   int facesPerTask = 64;  ///< faces per parallel task; fixed so results do not depend on threads
   /// Checks the options; throws InvalidInputError naming the bad field.
   void validate() const;
@@ -70,6 +74,14 @@ class TexelOperators {
   /// Stiffness matrix S (|T| x |T|, symmetric PSD, S 1 = 0): S_st = int sqrt|g| g^-1(dphi_s,
   /// dphi_t) (paper Sec. 5.3 footnote 5); positive diagonal (the negative of a Laplacian).
   const SparseMatrixd& stiffness() const;
+  /// Seam-continuity matrix C (|T| x |T|, symmetric PSD): x^T C x = E_C = integral over the
+  /// seams of (f_side0 - f_side1)^2 with respect to surface length under the current metric
+  /// (paper Sec. 4.2). Zero for the seam-continuous basis, whose functions have no seam jumps.
+  const SparseMatrixd& seamContinuity() const;
+  /// System matrix of the screened problem min alpha ||f - psi||^2 + ||df - omega||^2
+  /// (+ alpha lambda E_C for the bilinear baseline): alpha M + S + alpha lambda C
+  /// (paper Sec. 4.2 and 5.3); the right-hand side alpha mass_h(psi) + div_h(omega) is unchanged.
+  SparseMatrixd screenedSystem(double alpha) const;
   /// sum_c beta_c S_c with S_c the stiffness integrated over cell c only (paper Sec. 7.1);
   /// beta is indexed by TexelGrid::cellIndex. Same pattern as stiffness().
   SparseMatrixd modulatedStiffness(std::span<const double> betaPerCell) const;
