@@ -5,6 +5,7 @@
 #include "commands.h"
 #include "texgrad/apps/filter.h"
 #include "texgrad/apps/texel_signal.h"
+#include "texgrad/core/error.h"
 #include "texgrad/io/image_io.h"
 
 namespace texgrad::cli {
@@ -13,6 +14,8 @@ namespace {
 struct FilterArgs {
   std::string mesh, texture, out, betaMap, slot = "baseColor", bitDepth;
   std::vector<double> betaRange{0.0, 2.0};
+  std::string basis = "continuous";
+  double seamWeight = 0.0;
   FilterOptions options;
   SolverArgs solver;
   ReportArgs report;
@@ -27,7 +30,17 @@ void runFilter(FilterArgs args) {
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), texture.width, texture.height, {}, progress);
+  OperatorOptions operatorOptions;
+  if (args.basis == "bilinear") {
+    operatorOptions.basis = fem::BasisKind::Bilinear;
+    operatorOptions.seamContinuityWeight = args.seamWeight;
+  } else if (args.seamWeight != 0.0) {
+    throw InvalidInputError(
+        "--seam-weight applies to --basis bilinear only (the continuous "
+        "basis has no seam jumps to penalise)");
+  }
+  const TexelDomain domain(std::move(mesh), texture.width, texture.height, operatorOptions,
+                           progress);
   timer.lap("operators");
   if (!args.betaMap.empty()) {
     const Image map = readImage(args.betaMap);
@@ -76,6 +89,14 @@ void addFilterCommand(CLI::App& app) {
                   "acts on finer detail only); paper default 1e4")
       ->default_val(1e4)
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--basis", args->basis,
+                  "continuous (the paper's seam-continuous texel basis) or bilinear (the paper's "
+                  "Sec. 4.2 baseline: plain bilinear texels, seams coupled only by --seam-weight)")
+      ->check(CLI::IsMember({"continuous", "bilinear"}));
+  cmd->add_option("--seam-weight", args->seamWeight,
+                  "lambda of the soft seam energy E_C for --basis bilinear (paper Sec. 4.2, Fig. "
+                  "5); 0 leaves the charts uncoupled")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--beta-map", args->betaMap,
                   "Image whose brightness (0..1) sets beta per texel cell, mapped onto "
                   "--beta-range (local filtering); replaces --beta");

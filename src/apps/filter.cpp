@@ -1,5 +1,6 @@
 // Screened Poisson filtering (paper §7.1): (alpha M + S) x* = (alpha M + S_beta) x, where S_beta
-// is beta S, or sum_c beta_c S_c for a painted map.
+// is beta S, or sum_c beta_c S_c for a painted map. With the bilinear baseline basis the system
+// also holds the soft seam energy alpha lambda E_C (paper §4.2, Fig. 5).
 #include "texgrad/apps/filter.h"
 
 #include <cmath>
@@ -30,12 +31,11 @@ InteractiveFilter::InteractiveFilter(const TexelDomain& domain, const Image& tex
   x0_ = gatherTexels(domain.grid(), working_);
   x_ = x0_;
   const TexelOperators& ops = domain.operators();
-  solver_.init(ops.stiffness());
+  solver_.init(ops.screenedSystem(1.0));  // the pattern (with E_C's seam pairs, if any)
   setParameters(options.alpha, options.beta, options.betaPerCell);
 }
 
-void InteractiveFilter::setParameters(double alpha, double beta,
-                                      std::vector<double> betaPerCell) {
+void InteractiveFilter::setParameters(double alpha, double beta, std::vector<double> betaPerCell) {
   if (!(alpha > 0.0) || !std::isfinite(alpha))
     throw InvalidInputError("alpha must be a positive number, got " + std::to_string(alpha));
   const TexelOperators& ops = domain_.operators();
@@ -50,12 +50,16 @@ void InteractiveFilter::setParameters(double alpha, double beta,
   // The system matrix depends on alpha only: painting beta changes just the right-hand side.
   if (alpha == alpha_) return;
   alpha_ = alpha;
-  solver_.update(alpha * ops.mass() + ops.stiffness());
+  solver_.update(ops.screenedSystem(alpha));  // alpha M + S (+ alpha lambda C, paper §4.2)
 }
 
-SolveReport InteractiveFilter::step() { return solver_.step(rhs_, x_); }
+SolveReport InteractiveFilter::step() {
+  return solver_.step(rhs_, x_);
+}
 
-SolveReport InteractiveFilter::solve() { return solver_.solve(rhs_, x_); }
+SolveReport InteractiveFilter::solve() {
+  return solver_.solve(rhs_, x_);
+}
 
 Image InteractiveFilter::image() const {
   const TexelGrid& grid = domain_.grid();

@@ -45,6 +45,30 @@ TEST(Filter, SmoothingLowersSeamJumpAndEnergySharpeningRaisesEnergy) {
   EXPECT_LT(after.rms, 0.5 * before.rms);
 }
 
+TEST(Filter, SoftSeamBaselineNeedsLambdaWhereTheContinuousBasisDoesNot) {
+  // Paper §4.2 / Fig. 5: plain bilinear texels leave charts uncoupled (lambda = 0); the soft seam
+  // energy alpha lambda E_C pulls the sides together as lambda grows.
+  const Image input = test::randomTexture(128, 128, 1, 3);
+  const auto smoothedJump = [&](fem::BasisKind basis, double lambda) {
+    OperatorOptions ops;
+    ops.basis = basis;
+    ops.seamContinuityWeight = lambda;
+    const TexelDomain domain(procedural::cubeSphere(8), 128, 128, ops);
+    const Image smooth = filterTexture(domain, input, withSolver(SolverKind::Direct, 0.0)).image;
+    return measureSeamJump(domain.mesh(), domain.atlas(), smooth).rms;
+  };
+  const double continuous = smoothedJump(fem::BasisKind::SeamContinuous, 0.0);
+  const double uncoupled = smoothedJump(fem::BasisKind::Bilinear, 0.0);
+  const double soft = smoothedJump(fem::BasisKind::Bilinear, 1e-2);
+  const double stiff = smoothedJump(fem::BasisKind::Bilinear, 1e2);
+  std::cout << "[ filter ] seam jump after smoothing: continuous basis " << continuous
+            << ", bilinear lambda 0: " << uncoupled << ", 1e-2: " << soft << ", 1e2: " << stiff
+            << "\n";
+  EXPECT_LT(continuous, 0.5 * uncoupled);
+  EXPECT_LT(soft, uncoupled);
+  EXPECT_LT(stiff, soft);
+}
+
 TEST(Filter, SmoothingIsIsotropicOnTheSurfaceForAnisotropicUvs) {
   // The unit square with UVs squeezed 4x in v: an impulse must blur into a circle on the surface
   // (an ellipse in UV), so surface second moments agree in x and y.
