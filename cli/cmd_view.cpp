@@ -1,10 +1,12 @@
-// `texgrad view`: serves the browser viewer for one mesh and app (filter, geodesic, react, lic);
+// `texgrad view`: serves the browser viewer for one mesh and app (filter, geodesic, react, lic,
+// stitch);
 // the solving is the apps', the serving the viewer module's; this file maps flags onto options.
 #include <iostream>
 
 #include "cli_common.h"
 #include "commands.h"
 #include "texgrad/apps/texel_domain.h"
+#include "texgrad/io/image_io.h"
 #include "texgrad/viewer/viewer_server.h"
 #include "texgrad/viewer/viewer_session.h"
 
@@ -12,7 +14,7 @@ namespace texgrad::cli {
 namespace {
 
 struct ViewArgs {
-  std::string mesh, texture, app = "filter", resolution, out;
+  std::string mesh, texture, app = "filter", resolution, out, composite, segments;
   double weldTolerance = 0.0;
   viewer::ViewerAppOptions appOptions;
   viewer::SessionOptions session;
@@ -26,8 +28,25 @@ void runView(ViewArgs& args) {
   args.session.savePath = args.out;
   args.session.validate();
   args.server.validate();
+  const bool stitch = kind == viewer::ViewerAppKind::Stitch;
+  if (!stitch && (!args.composite.empty() || !args.segments.empty()))
+    throw InvalidInputError("--composite and --segments are for --app stitch");
+  if (stitch && !args.texture.empty() && !args.composite.empty())
+    throw InvalidInputError("give the composite once: as TEXTURE or as --composite");
+  if (stitch && args.composite.empty()) args.composite = args.texture;
+  if (stitch && (args.composite.empty() || args.segments.empty()))
+    throw InvalidInputError("--app stitch needs --composite TEXTURE and --segments MASK");
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
-  Image texture = loadTexture(mesh, args.mesh, args.texture);
+  Image texture = stitch ? readImage(args.composite) : loadTexture(mesh, args.mesh, args.texture);
+  if (stitch) {
+    args.appOptions.segments = readImage(args.segments);
+    const Image& s = args.appOptions.segments;
+    if (s.width != texture.width || s.height != texture.height)
+      throw InvalidInputError("--segments is " + std::to_string(s.width) + "x" +
+                              std::to_string(s.height) + " but --composite is " +
+                              std::to_string(texture.width) + "x" +
+                              std::to_string(texture.height) + "; they must match");
+  }
   int width = texture.width, height = texture.height;
   if (!args.resolution.empty()) std::tie(width, height) = parseResolution(args.resolution);
   if (width != texture.width || height != texture.height)
@@ -59,13 +78,13 @@ void addViewCommand(CLI::App& app) {
       "view",
       "Serve an interactive viewer in the browser: paint filter strokes, click geodesic sources "
       "or run reaction-diffusion or LIC, and watch the solver refine one V-cycle (or time step) per "
-      "frame. Binds to 127.0.0.1; any other --host "
+      "frame; or stitch a composite and paint texels to lock. Binds to 127.0.0.1; any other --host "
       "prints a random access token that every request must carry.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   cmd->add_option("texture", args->texture, "Texture (default: the mesh's base-colour texture)");
   cmd->add_option("--app", args->app, "Interactive app")
-      ->check(CLI::IsMember({"filter", "geodesic", "react", "lic"}))
+      ->check(CLI::IsMember({"filter", "geodesic", "react", "lic", "stitch"}))
       ->default_val("filter");
   cmd->add_option("--host", args->server.host, "Address to bind (IP literal or localhost)")
       ->default_val("127.0.0.1");
@@ -92,6 +111,16 @@ void addViewCommand(CLI::App& app) {
   cmd->add_option("--seed", args->appOptions.seed,
                   "React: seed of the initial spots; lic: of the noise (Reset adds 1)")
       ->default_val(1);
+  cmd->add_option("--composite", args->composite,
+                  "Stitch: composite texture (each texel from one source; or give it as TEXTURE)");
+  cmd->add_option("--segments", args->segments,
+                  "Stitch: source mask of the composite, one colour per source, black = none");
+  cmd->add_option("--stitch-alpha", args->appOptions.stitchAlpha,
+                  "Stitch: screening weight (larger keeps the sources' absolute colours)")
+      ->default_val(1e2)
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("!--no-gain-compensation", args->appOptions.compensateGains,
+                "Stitch: keep each source's exposure and colour cast");
   cmd->add_option("--max-fps", args->session.maxUpdatesPerSecond,
                   "Upper bound on solver steps (frames) per second")
       ->default_val(60.0);

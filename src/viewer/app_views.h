@@ -17,6 +17,9 @@ std::unique_ptr<ViewerApp> makeReactView(const TexelDomain& domain, const Image&
 
 std::unique_ptr<ViewerApp> makeLicView(TexelDomain& domain, const ViewerAppOptions& options);
 
+std::unique_ptr<ViewerApp> makeStitchView(const TexelDomain& domain, const Image& composite,
+                                          const ViewerAppOptions& options);
+
 /// RGBA8 texels of a float image in [0, 1] (grey replicated, alpha 255 when absent).
 std::vector<uint8_t> toRgba8(const Image& image);
 

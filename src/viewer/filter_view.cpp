@@ -33,6 +33,8 @@ class FilterView final : public ViewerApp {
       alpha_ = p->alpha;
       beta_ = p->beta;
     } else if (const auto* dab = std::get_if<BrushDab>(&message)) {
+      if (dab->mode == BrushMode::Lock || dab->mode == BrushMode::Unlock)
+        throw ProtocolError("the filter brush paints smooth, sharpen or erase (lock is stitch's)");
       const double target = dab->mode == BrushMode::Smooth    ? 0.0
                             : dab->mode == BrushMode::Sharpen ? options_.sharpenBeta
                                                               : 1.0;

@@ -97,9 +97,20 @@ ClientMessage parseObject(const json& msg, int32_t faceCount) {
       dab.mode = BrushMode::Sharpen;
     else if (mode == "erase")
       dab.mode = BrushMode::Erase;
+    else if (mode == "lock")
+      dab.mode = BrushMode::Lock;
+    else if (mode == "unlock")
+      dab.mode = BrushMode::Unlock;
     else
-      throw ProtocolError("brush mode must be smooth, sharpen or erase");
+      throw ProtocolError("brush mode must be smooth, sharpen, erase, lock or unlock");
     return dab;
+  }
+  if (type == "show") {
+    requireOnlyKeys(msg, {"type", "texture"});
+    const std::string texture = text(msg, "texture");
+    if (texture == "stitched") return ShowTexture{true};
+    if (texture == "composite") return ShowTexture{false};
+    throw ProtocolError("show texture must be composite or stitched");
   }
   if (type == "run") {
     requireOnlyKeys(msg, {"type", "action"});

@@ -15,8 +15,9 @@ ViewerAppKind parseViewerAppKind(const std::string& text) {
   if (text == "geodesic") return ViewerAppKind::Geodesic;
   if (text == "react") return ViewerAppKind::React;
   if (text == "lic") return ViewerAppKind::Lic;
+  if (text == "stitch") return ViewerAppKind::Stitch;
   throw InvalidInputError("unknown viewer app \"" + text +
-                          "\": use filter, geodesic, react or lic");
+                          "\": use filter, geodesic, react, lic or stitch");
 }
 
 std::string toString(ViewerAppKind kind) {
@@ -25,6 +26,7 @@ std::string toString(ViewerAppKind kind) {
     case ViewerAppKind::Geodesic: return "geodesic";
     case ViewerAppKind::React: return "react";
     case ViewerAppKind::Lic: return "lic";
+    case ViewerAppKind::Stitch: return "stitch";
   }
   return "?";
 }
@@ -41,6 +43,8 @@ void ViewerAppOptions::validate() const {
     throw InvalidInputError("geodesicAlpha must lie in [" + std::to_string(kMinAlpha) + ", " +
                             std::to_string(kMaxAlpha) + "]");
   parseReactionPreset(reactPreset);  // throws InvalidInputError naming the presets
+  if (!(stitchAlpha > 0.0) || !std::isfinite(stitchAlpha))
+    throw InvalidInputError("stitchAlpha must be a positive number");
 }
 
 namespace {
@@ -72,6 +76,7 @@ std::unique_ptr<ViewerApp> makeViewerApp(ViewerAppKind kind, const TexelDomain& 
     case ViewerAppKind::Filter: return makeFilterView(domain, texture, options);
     case ViewerAppKind::Geodesic: return makeGeodesicView(domain, texture, options);
     case ViewerAppKind::React: return makeReactView(domain, texture, options);
+    case ViewerAppKind::Stitch: return makeStitchView(domain, texture, options);
     case ViewerAppKind::Lic:
       throw InvalidInputError("the lic viewer app needs a non-const TexelDomain");
   }

@@ -3,9 +3,11 @@
 import { run as geodesic } from "./geodesic.e2e.mjs";
 import { run as filter } from "./filter.e2e.mjs";
 import { run as react } from "./react.e2e.mjs";
+import { run as stitch } from "./stitch.e2e.mjs";
 
 let failed = 0;
-for (const [name, test] of [["geodesic", geodesic], ["filter", filter], ["react", react]]) {
+const tests = [["geodesic", geodesic], ["filter", filter], ["react", react], ["stitch", stitch]];
+for (const [name, test] of tests) {
   const start = Date.now();
   console.log(`== viewer e2e: ${name}`);
   try {

@@ -113,6 +113,7 @@ async function main() {
   controls.addEventListener("change", () => requestRender());
 
   const surface = surfaceMaterial(info.width, info.height, 2 * sphere.radius);
+  surface.setLockTint(info.app === "stitch");
   const model = new THREE.Mesh(geometry, surface.material);
   scene.add(model);
 
@@ -132,6 +133,7 @@ async function main() {
     stats.frames += 1;
     stats.last = latest.header;
     stats.lastTexels = latest.texels;
+    if (stats.onFrame) stats.onFrame(latest.header);
     recent(stats.frameTimes, performance.now());
   };
   const connection = new Connection(
@@ -161,22 +163,59 @@ async function main() {
     return { face: f, bary: w.map((x) => x / sum) };
   };
 
-  const brush = () => ({
-    radius: Number($("radius").value),
-    strength: Number($("strength").value),
-    mode: document.querySelector("input[name=mode]:checked").value,
-  });
+  const lockMode = () => document.querySelector("input[name=lock-mode]:checked").value;
+  const brush = () => (info.app === "stitch"
+    ? { radius: Number($("lock-radius").value), strength: 1, mode: lockMode() }
+    : { radius: Number($("radius").value), strength: Number($("strength").value),
+        mode: document.querySelector("input[name=mode]:checked").value });
+  // Stitch: which texture the server shows and whether a solve is under way. The worker answers
+  // requests only between solves, so the page times re-solves itself: from the first change
+  // (brush, reset) to the first frame stepped after the last change was applied.
+  const stitch = { stitched: true, solving: info.app === "stitch", pending: 0, applied: 0,
+                   after: 0, started: performance.now(), seconds: null, residual: null };
+  const setShown = (stitched) => {
+    stitch.stitched = stitched;
+    $("toggle").textContent = stitched ? "Show composite" : "Show stitched";
+  };
+  const stitchChange = (message) => {
+    if (!stitch.solving) {
+      stitch.started = performance.now();
+      stitch.applied = 0;
+    }
+    stitch.solving = true;
+    stitch.pending += 1;
+    setShown(true);
+    return connection.request(message).then((reply) => {
+      stitch.pending -= 1;
+      stitch.after = stats.last ? stats.last.sequence : 0;
+      if (reply.type !== "error") stitch.applied += 1;
+      // Only refused changes (e.g. a radius out of range): nothing is solved.
+      if (stitch.pending === 0 && stitch.applied === 0) stitch.solving = false;
+      return reply;
+    });
+  };
+  stats.onFrame = (header) => {
+    if (info.app !== "stitch" || !stitch.solving || stitch.pending > 0) return;
+    if (header.iteration < 1 || header.sequence <= stitch.after) return;
+    stitch.solving = false;
+    stitch.residual = header.residual;
+    if (stitch.after > 0) stitch.seconds = (performance.now() - stitch.started) / 1000;
+  };
   let painting = false, lastDab = 0, down = null;
   const dabInterval = 50;  // ms between brush dabs while dragging
   const dab = (event) => {
     const hit = pick(event.clientX, event.clientY);
     if (!hit) return;
     lastDab = performance.now();
-    connection.request({ type: "brush", ...hit, ...brush() });
+    const message = { type: "brush", ...hit, ...brush() };
+    if (info.app === "stitch") stitchChange(message);
+    else connection.request(message);
   };
+  const paints = (event) => event.button === 0 &&
+      (info.app === "filter" || (info.app === "stitch" && lockMode() !== "off"));
   renderer.domElement.addEventListener("pointerdown", (event) => {
     down = { x: event.clientX, y: event.clientY };
-    if (info.app === "filter" && event.button === 0 && pick(event.clientX, event.clientY)) {
+    if (paints(event) && pick(event.clientX, event.clientY)) {
       painting = true;
       controls.enabled = false;
       dab(event);
@@ -208,13 +247,21 @@ async function main() {
   bindSlider("beta", (v) => v.toFixed(2), sendParameters);
   bindSlider("radius", (v) => v.toFixed(3));
   bindSlider("strength", (v) => v.toFixed(2));
+  bindSlider("lock-radius", (v) => v.toFixed(3));
+  $("toggle").addEventListener("click", () => {
+    setShown(!stitch.stitched);
+    connection.request({ type: "show", texture: stitch.stitched ? "stitched" : "composite" });
+  });
   bindSlider("iso", (v) => v.toFixed(3), () => {
     surface.setIsoSpacing(Number($("iso").value));
     requestRender();
   });
   surface.setIsoSpacing(Number($("iso").value));
   for (const action of ["start", "pause", "step", "reset"])
-    $(action).addEventListener("click", () => connection.request({ type: "run", action }));
+    $(action).addEventListener("click", () => {
+      if (info.app === "stitch" && action === "reset") stitchChange({ type: "run", action });
+      else connection.request({ type: "run", action });
+    });
   $("save").addEventListener("click", async () => {
     const reply = await connection.request({ type: "save" });
     if (reply.type === "saved") showMessage(`saved ${reply.path}`);
@@ -222,9 +269,28 @@ async function main() {
 
   // Updates per second shown on the model (frames received: stats.frameTimes).
   const pageRate = () => stats.shownTimes.length;
+  let stateAsked = false;
+  const showStitchStatus = () => {
+    const state = stitch.solving
+      ? `solving... ${((performance.now() - stitch.started) / 1000).toFixed(1)} s`
+      : `solved${stitch.seconds === null ? "" : ` in ${stitch.seconds.toFixed(2)} s`}`;
+    $("stats").textContent = `${state}\n` +
+        (stitch.residual === null ? "" : `residual ${stitch.residual.toExponential(2)}\n`) +
+        `showing ${stitch.stitched ? "stitched" : "composite"}`;
+  };
   setInterval(async () => {
+    if (info.app === "stitch") showStitchStatus();
+    if (stateAsked) return;  // the server answers after the running solve
+    stateAsked = true;
     stats.serverState = await connection.request({ type: "state" });
+    stateAsked = false;
     const s = stats.serverState, h = stats.last;
+    if (info.app === "stitch") {
+      // The first step is the initial solve: the server timed it.
+      if (s.totalSteps === 1 && stitch.seconds === null) stitch.seconds = s.lastStepSeconds;
+      if (s.error) showMessage(s.error);
+      return showStitchStatus();
+    }
     $("stats").textContent =
         `updates/s page ${pageRate()} (received ${stats.frameTimes.length})  ` +
         `server ${s.updatesPerSecond.toFixed(1)}\n` +

@@ -1,5 +1,6 @@
-// Surface shading of the viewer: the app's texture (filter) or distances with a colour map and
-// isolines (geodesic), under simple headlight shading that keeps hues recognisable.
+// Surface shading of the viewer: the app's texture (filter; stitch with its locked texels tinted)
+// or distances with a colour map and isolines (geodesic), under simple headlight shading that
+// keeps hues recognisable.
 import * as THREE from "three";
 
 const vertexShader = /* glsl */ `
@@ -19,6 +20,7 @@ const fragmentShader = /* glsl */ `
   uniform int mode;
   uniform float scale;
   uniform float isoSpacing;
+  uniform bool lockTint;
   varying vec2 vUv;
   varying vec3 vNormal;
   vec3 distanceColour(float t) {
@@ -32,6 +34,8 @@ const fragmentShader = /* glsl */ `
     float code = floor(texel.r * 255.0 + 0.5) + 256.0 * floor(texel.g * 255.0 + 0.5);
     if (mode == 0) {
       colour = texel.rgb;
+      // stitch: alpha 0 marks locked texels; tint them cyan.
+      if (lockTint) colour = mix(colour, vec3(0.1, 0.85, 1.0), 0.45 * (1.0 - texel.a));
     } else if (code > 65534.5) {
       colour = vec3(0.5);
     } else {
@@ -51,6 +55,7 @@ export function surfaceMaterial(width, height, size) {
       mode: { value: 0 },
       scale: { value: 1.0 },
       isoSpacing: { value: 0.05 },
+      lockTint: { value: false },
     },
     vertexShader,
     fragmentShader,
@@ -88,6 +93,8 @@ export function surfaceMaterial(width, height, size) {
       if (header.format === 2) material.uniforms.scale.value = header.scale;
       return true;
     },
+    /// Stitch: tint texels whose alpha is 0 (the lock mask the stitch app sends in alpha).
+    setLockTint(on) { material.uniforms.lockTint.value = on; },
     /// Isoline spacing as a fraction of the model size.
     setIsoSpacing(fraction) { material.uniforms.isoSpacing.value = fraction * size; },
   };

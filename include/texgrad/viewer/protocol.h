@@ -53,14 +53,20 @@ struct SetFilterParameters {
   double alpha = 1e4;
   double beta = 1.0;
 };
-/// What a brush dab does to the painted gradient-scale map.
-enum class BrushMode : uint8_t { Smooth, Sharpen, Erase };
-/// filter: one brush dab at a surface point.
+/// What a brush dab does: filter: to the painted gradient-scale map (smooth, sharpen, erase);
+/// stitch: to the lock mask (lock, unlock).
+enum class BrushMode : uint8_t { Smooth, Sharpen, Erase, Lock, Unlock };
+/// filter, stitch: one brush dab at a surface point.
 struct BrushDab {
   SurfaceHit at;
   double radius = 0.05;   ///< fraction of the bounding-box diagonal
-  double strength = 0.5;  ///< in (0, 1]: how far one dab moves the map towards its target
+  double strength = 0.5;  ///< in [0, 1]: how far one dab moves the map towards its target (the
+                          ///< lock modes are all or nothing and ignore it)
   BrushMode mode = BrushMode::Smooth;
+};
+/// stitch: which texture the page is shown (the composite input or the stitched result).
+struct ShowTexture {
+  bool stitched = true;
 };
 /// Solver control of any app.
 enum class RunAction : uint8_t { Start, Pause, Step, Reset };
@@ -78,7 +84,8 @@ struct QueryState {};
 
 /// Any validated client message.
 using ClientMessage =
-    std::variant<SetSource, SetFilterParameters, BrushDab, Run, Save, Probe, QueryState>;
+    std::variant<SetSource, SetFilterParameters, BrushDab, ShowTexture, Run, Save, Probe,
+                 QueryState>;
 
 /// Largest request id a page may attach (ids pair replies with requests).
 inline constexpr int64_t kMaxRequestId = (int64_t{1} << 31) - 1;

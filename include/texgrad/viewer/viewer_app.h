@@ -14,8 +14,9 @@
 namespace texgrad::viewer {
 
 /// Apps the viewer can drive.
-enum class ViewerAppKind { Filter, Geodesic, React, Lic };
-/// Parses "filter", "geodesic", "react" or "lic"; throws InvalidInputError otherwise (naming the others).
+enum class ViewerAppKind { Filter, Geodesic, React, Lic, Stitch };
+/// Parses "filter", "geodesic", "react", "lic" or "stitch"; throws InvalidInputError otherwise
+/// (naming the others).
 ViewerAppKind parseViewerAppKind(const std::string& text);
 /// Name accepted by parseViewerAppKind.
 std::string toString(ViewerAppKind kind);
@@ -27,11 +28,12 @@ struct StepResult {
 };
 
 /// One interactive app on a TexelDomain (filter, geodesic: refine towards a target after each
-/// change; react: a time stepper). Not thread-safe: the session calls it from its worker.
+/// change; react: a time stepper; lic, stitch: one full solve per change). Not thread-safe: the
+/// session calls it from its worker.
 class ViewerApp {
  public:
   virtual ~ViewerApp() = default;
-  /// "filter", "geodesic", "react" or "lic".
+  /// "filter", "geodesic", "react", "lic" or "stitch".
   virtual std::string name() const = 0;
   /// Applies a state-changing message (source, parameters, brush, reset); throws ProtocolError
   /// for a message this app does not take.
@@ -59,12 +61,19 @@ struct ViewerAppOptions {
   std::string reactPreset = "stripes";
   /// Seed of the reaction-diffusion spots (reset reseeds with it).
   uint64_t seed = 1;
+  /// Stitch: source mask of the composite (one colour per source, black = none; the texture's
+  /// size). The composite itself is the app's texture.
+  Image segments;
+  /// Stitch: screening weight (StitchOptions::alpha, paper default 1e2).
+  double stitchAlpha = 1e2;
+  /// Stitch: divide out one gain per source and colour channel (StitchOptions::compensateGains).
+  bool compensateGains = true;
   /// Throws InvalidInputError naming the first bad field.
   void validate() const;
 };
 
-/// Creates an app on `domain` (which must outlive it) for `texture` (filter input; the other apps
-/// only need its size). The lic app borrows the domain's operators while it sets up, so it needs
+/// Creates an app on `domain` (which must outlive it) for `texture` (filter input; stitch: the
+/// composite, with options.segments; the other apps only need its size). The lic app borrows the domain's operators while it sets up, so it needs
 /// the non-const overload; the const one throws InvalidInputError for it.
 std::unique_ptr<ViewerApp> makeViewerApp(ViewerAppKind kind, const TexelDomain& domain,
                                          const Image& texture, const ViewerAppOptions& options);
