@@ -11,11 +11,18 @@
 #include <vector>
 
 #include "texgrad/atlas/atlas.h"
-#include "texgrad/atlas/texel_grid.h"
 #include "texgrad/atlas/cell_clipping.h"
+#include "texgrad/atlas/texel_grid.h"
 #include "texgrad/io/textured_mesh.h"
 
 namespace texgrad::test {
+
+/// B_t(p): the bilinear hat of unknown `unknown` at grid point p (texel centres at integers).
+inline double bilinear(const TexelGrid& g, int unknown, const Eigen::Vector2d& p) {
+  const int t = g.texelOfUnknown[static_cast<size_t>(unknown)];
+  const double dx = std::abs(p.x() - t % g.nx), dy = std::abs(p.y() - t / g.nx);
+  return std::max(0.0, 1.0 - dx) * std::max(0.0, 1.0 - dy);
+}
 
 /// Flat unit square (z = 0) as n x n quads split in two, UV = (u0 + su x, v0 + sv y).
 inline TexturedMesh gridSquare(int n, double su = 1.0, double sv = 1.0, double u0 = 0.0,
@@ -44,7 +51,9 @@ inline TexturedMesh gridSquare(int n, double su = 1.0, double sv = 1.0, double u
 /// `density`), so one seam side receives many points from the other.
 inline TexturedMesh twoChartSquare(int n, double density = 0.37) {
   TexturedMesh m;
-  auto leftUv = [](double x, double y) { return Eigen::Vector2d(0.0537 + 0.8 * x, 0.0611 + 0.8 * y); };
+  auto leftUv = [](double x, double y) {
+    return Eigen::Vector2d(0.0537 + 0.8 * x, 0.0611 + 0.8 * y);
+  };
   auto rightUv = [&](double x, double y) {
     return Eigen::Vector2d(0.5731 + density * 0.8 * (x - 0.5), 0.0913 + density * 0.8 * y);
   };
@@ -84,7 +93,8 @@ inline TexturedMesh cubeSphere(int n) {
     const int axis = f / 2;
     const bool plus = f % 2 == 0;
     // U x V = outward normal.
-    const std::array<std::array<int, 2>, 6> uvAxes{{{1, 2}, {2, 1}, {2, 0}, {0, 2}, {0, 1}, {1, 0}}};
+    const std::array<std::array<int, 2>, 6> uvAxes{
+        {{1, 2}, {2, 1}, {2, 0}, {0, 2}, {0, 1}, {1, 0}}};
     const int au = uvAxes[f][0], av = uvAxes[f][1];
     const int base = int(m.uvs.size());
     const double cu = (f % 3) / 3.0, cv = (f / 3) / 2.0;

@@ -8,6 +8,7 @@
 #include <random>
 #include <tuple>
 
+#include "fem_fixtures.h"
 #include "shared_meshes.h"
 #include "texgrad/fem/texel_basis.h"
 #include "texgrad/io/mesh_reader.h"
@@ -66,13 +67,33 @@ TEST_P(SharedMeshBasis, PartitionOfUnityAndSeamContinuity) {
   const TexelBasis basis(mesh, atlas, grid);
   std::mt19937_64 rng(7);
 
-  double worstUnity = 0.0;
+  double worstUnity = 0.0, worstBilinear = 0.0;
+  int bilinearChecks = 0;
   for (int k = 0; k < kSamples; ++k) {
+    const SurfacePoint p = basis.randomPoint(rng);
+    const auto weights = basis.evaluate(p);
     double sum = 0.0;
-    for (const auto& w : basis.evaluate(basis.randomPoint(rng))) sum += w.weight;
+    for (const auto& w : weights) sum += w.weight;
     worstUnity = std::max(worstUnity, std::abs(sum - 1.0));
+    // Bilinear reproduction: phi_t = B_t on the footprint of every interior texel t.
+    for (int dy = 0; dy < 2; ++dy)
+      for (int dx = 0; dx < 2; ++dx) {
+        const int x = static_cast<int>(std::floor(p.grid.x())) + dx;
+        const int y = static_cast<int>(std::floor(p.grid.y())) + dy;
+        if (x < 0 || y < 0 || x >= grid.nx || y >= grid.ny) continue;
+        const int t = grid.texelIndex(x, y);
+        if (grid.texelClass[static_cast<size_t>(t)] != TexelClass::Interior) continue;
+        const int u = grid.unknownOfTexel[static_cast<size_t>(t)];
+        double phi = 0.0;
+        for (const auto& w : weights)
+          if (w.unknown == u) phi = w.weight;
+        worstBilinear = std::max(worstBilinear, std::abs(phi - test::bilinear(grid, u, p.grid)));
+        ++bilinearChecks;
+      }
   }
   EXPECT_LE(worstUnity, kTight);
+  EXPECT_GT(bilinearChecks, kSamples);  // most random points lie in interior footprints
+  EXPECT_LE(worstBilinear, kTight);
 
   if (shared.seamEdges == 0) {
     EXPECT_EQ(basis.seamCount(), 0);
@@ -101,10 +122,10 @@ TEST_P(SharedMeshBasis, PartitionOfUnityAndSeamContinuity) {
     aboveTight += jump > kTight;
   }
   std::printf(
-      "%s %d: max |1 - sum phi| %.2e, max seam jump %.2e (%d of %d pairs above %.0e; "
-      "max jump / rounding bound %.2f)\n",
-      shared.name.c_str(), resolution, worstUnity, worstJump, aboveTight, kSamples, kTight,
-      worstRatio);
+      "%s %d: max |1 - sum phi| %.2e, max |phi - B| %.2e over %d interior checks, max seam jump "
+      "%.2e (%d of %d pairs above %.0e; max jump / rounding bound %.2f)\n",
+      shared.name.c_str(), resolution, worstUnity, worstBilinear, bilinearChecks, worstJump,
+      aboveTight, kSamples, kTight, worstRatio);
 }
 
 std::string paramName(const ::testing::TestParamInfo<Param>& info) {

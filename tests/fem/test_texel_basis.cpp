@@ -31,12 +31,6 @@ std::vector<Case> cases() {
   return out;
 }
 
-double bilinear(const TexelGrid& g, int unknown, const Eigen::Vector2d& p) {
-  const int t = g.texelOfUnknown[unknown];
-  const double dx = std::abs(p.x() - t % g.nx), dy = std::abs(p.y() - t / g.nx);
-  return std::max(0.0, 1.0 - dx) * std::max(0.0, 1.0 - dy);
-}
-
 TEST(Quadrature, IntegratesMonomialsExactly) {
   auto factorial = [](int n) {
     double f = 1;
@@ -141,7 +135,7 @@ TEST(TexelBasis, ReproducesBilinearOnInteriorTexels) {
           double phi = 0;
           for (const auto& w : weights)
             if (w.unknown == u) phi = w.weight;
-          EXPECT_NEAR(phi, bilinear(grid, u, p.grid), kTight) << c.name;
+          EXPECT_NEAR(phi, test::bilinear(grid, u, p.grid), kTight) << c.name;
           ++checked;
         }
     }

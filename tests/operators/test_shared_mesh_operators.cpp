@@ -1,8 +1,13 @@
 // Operator invariants (DESIGN.md Sec. 4) on every mesh of ../shared/data at 256^2 and 1024^2:
-// S 1 = 0, 1^T M 1 = 1 (unit-area surface), positive diagonals, clean clipping.
+// S 1 = 0, 1^T M 1 = 1 (unit-area surface), positive diagonals, clean clipping; at 256^2 also
+// M positive definite and S positive semi-definite with one null vector per connected component.
 #include <gtest/gtest.h>
 
+#include <Eigen/SparseCholesky>
+#include <cstdio>
+#include <numeric>
 #include <tuple>
+#include <vector>
 
 #include "shared_meshes.h"
 #include "texgrad/io/mesh_reader.h"
@@ -30,6 +35,48 @@ TEST_P(SharedMeshOperators, KernelAreaAndDiagonals) {
   Eigen::Index row = 0;
   EXPECT_GT(m.diagonal().minCoeff(&row), 0.0) << "zero mass row " << row;
   EXPECT_GT(s.diagonal().minCoeff(&row), 0.0) << "zero stiffness row " << row;
+}
+
+/// Connected components of the graph of a symmetric sparse matrix (union-find over non-zeros).
+int graphComponents(const SparseMatrixd& a) {
+  std::vector<Eigen::Index> parent(static_cast<size_t>(a.rows()));
+  std::iota(parent.begin(), parent.end(), Eigen::Index{0});
+  const auto root = [&](Eigen::Index v) {
+    while (parent[static_cast<size_t>(v)] != v)
+      v = parent[static_cast<size_t>(v)] =
+          parent[static_cast<size_t>(parent[static_cast<size_t>(v)])];
+    return v;
+  };
+  for (Eigen::Index k = 0; k < a.outerSize(); ++k)
+    for (SparseMatrixd::InnerIterator it(a, k); it; ++it)
+      parent[static_cast<size_t>(root(it.row()))] = root(it.col());
+  int count = 0;
+  for (Eigen::Index v = 0; v < a.rows(); ++v) count += root(v) == v;
+  return count;
+}
+
+TEST_P(SharedMeshOperators, MassDefiniteStiffnessSemiDefiniteWithConstantKernel) {
+  const auto& [shared, resolution] = GetParam();
+  if (resolution > 256) GTEST_SKIP() << "factorisations are checked at 256^2";
+  const TexturedMesh mesh = readMesh(test::sharedData() / shared.obj);
+  const Atlas atlas = buildAtlas(mesh);
+  const TexelGrid grid = buildTexelGrid(mesh, atlas, resolution, resolution);
+  const TexelOperators ops(mesh, atlas, grid);
+  const Eigen::SimplicialLLT<SparseMatrixd> mass(ops.mass());
+  EXPECT_EQ(mass.info(), Eigen::Success) << "M is not positive definite";
+  // LDL^T of S: one vanishing pivot per null vector, none negative (PSD). A pivot is compared
+  // with its own diagonal entry: diagonals span many orders of magnitude (grazing footprints).
+  const Eigen::SimplicialLDLT<SparseMatrixd> ldlt(ops.stiffness());
+  ASSERT_EQ(ldlt.info(), Eigen::Success);
+  const Eigen::ArrayXd d = ldlt.vectorD().array();
+  const Eigen::ArrayXd diagonal = (ldlt.permutationP() * ops.stiffness().diagonal()).array();
+  const Eigen::ArrayXd relative = d / diagonal;
+  EXPECT_GE(relative.minCoeff(), -1e-8) << "S has a negative pivot";
+  const auto nullPivots = (relative.abs() <= 1e-8).count();
+  std::printf("%s: %ld null pivot(s), smallest other relative pivot %.2e\n", shared.name.c_str(),
+              static_cast<long>(nullPivots),
+              (relative.abs() > 1e-8).select(relative.abs(), 1.0).minCoeff());
+  EXPECT_EQ(nullPivots, graphComponents(ops.stiffness())) << shared.name;
 }
 
 std::string paramName(const ::testing::TestParamInfo<Param>& info) {
