@@ -19,5 +19,5 @@ tg="${1:-build/release/texgrad}"
     "$tg" "$cmd" --help
     echo '```'
   done
-} > docs/cli.md
+} | sed "s|Usage: $tg|Usage: texgrad|" > docs/cli.md
 echo "wrote docs/cli.md"
