@@ -254,12 +254,17 @@ void GeodesicOptions::validate() const {
 /// centroid). div_h(omega)_t = sum_q weight_q dphi_t(q) . X_q with X_q = g^-1 omega_q.
 struct GeodesicSolver::Gradients {
   /// Piece with exactly bilinear basis: four cell texels, centroid in cell-local coordinates.
+  /// Compact (32 bytes: the divergence streams every sample once per update); the metric
+  /// comes from the face.
   struct CellSample {
     std::array<int32_t, 4> texels;  ///< order (a,b), (a+1,b), (a,b+1), (a+1,b+1); -1 if absent
-    double fx, fy;                  ///< centroid, cell-local
-    double weight;                  ///< area (texel units) * sqrt|g|
-    double hxx, hxy, hyy;           ///< g^-1
-    int32_t row;                    ///< cell row b (for the two-colour bands)
+    float fx, fy;                   ///< centroid, cell-local
+    float area;                     ///< area in texel units
+    int32_t face;                   ///< index into faceMetrics
+  };
+  /// Per face: sqrt|g| and g^-1.
+  struct FaceMetric {
+    double root = 0.0, hxx = 0.0, hxy = 0.0, hyy = 0.0;
   };
   /// Quadratic element of a seam piece: gradients of its local texels at the centroid.
   struct SeamSample {
@@ -268,10 +273,12 @@ struct GeodesicSolver::Gradients {
   };
 
   std::vector<CellSample> cells;  ///< sorted by cell row
+  std::vector<FaceMetric> faceMetrics;
   std::vector<int64_t> rowBegin;  ///< cells of row b: [rowBegin[b + 1], rowBegin[b + 2]), b >= -1
   std::vector<SeamSample> seams;
   std::vector<int32_t> seamTexels;
   std::vector<Eigen::Vector2d> seamGradients;
+  std::vector<Eigen::Vector2d> seamDirections;  ///< per seam sample: X of the last divergence
   tbb::task_arena arena;
 
   Gradients(const TexelDomain& domain, int threads)
@@ -289,8 +296,10 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
   const auto& metric = domain.operators().metric();
   const int faces = basis.faceCount();
   const int chunks = (faces + kFacesPerTask - 1) / kFacesPerTask;
+  faceMetrics.assign(static_cast<size_t>(faces), FaceMetric{});
   struct Chunk {
     std::vector<CellSample> cells;
+    std::vector<int32_t> cellRows;  ///< cell row b of each cell sample (for the colour bands)
     std::vector<SeamSample> seams;
     std::vector<int32_t> texels;
     std::vector<Eigen::Vector2d> gradients;
@@ -305,6 +314,7 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
       const Eigen::Matrix2d& g = metric[static_cast<size_t>(f)];
       const double root = std::sqrt(g.determinant());
       const Eigen::Matrix2d h = g.inverse();
+      faceMetrics[static_cast<size_t>(f)] = {root, h(0, 0), h(0, 1), h(1, 1)};
       basis.clipFace(f, clip);
       for (const auto& piece : clip.pieces) {
         const auto poly = clip.polygon(piece);
@@ -322,9 +332,10 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
           if (!(area > 0.0)) continue;
           centroid /= 3.0 * area;
           area *= 0.5;
-          chunk.cells.push_back({basis.cellTexels(piece.cellX, piece.cellY), centroid.x(),
-                                 centroid.y(), area * root, h(0, 0), h(0, 1), h(1, 1),
-                                 piece.cellY});
+          chunk.cells.push_back({basis.cellTexels(piece.cellX, piece.cellY),
+                                 static_cast<float>(centroid.x()), static_cast<float>(centroid.y()),
+                                 static_cast<float>(area), f});
+          chunk.cellRows.push_back(piece.cellY);
           continue;
         }
         basis.buildPieceBasis(f, poly, pb);
@@ -363,13 +374,14 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
   const TexelGrid& grid = domain.grid();
   rowBegin.assign(static_cast<size_t>(grid.ny) + 2, 0);
   for (const Chunk& chunk : out)
-    for (const CellSample& s : chunk.cells) ++rowBegin[static_cast<size_t>(s.row) + 2];
+    for (int32_t row : chunk.cellRows) ++rowBegin[static_cast<size_t>(row) + 2];
   for (size_t r = 1; r < rowBegin.size(); ++r) rowBegin[r] += rowBegin[r - 1];
   std::vector<int64_t> cursor(rowBegin.begin(), rowBegin.end() - 1);
   cells.resize(static_cast<size_t>(rowBegin.back()));
   for (Chunk& chunk : out) {
-    for (const CellSample& s : chunk.cells)
-      cells[static_cast<size_t>(cursor[static_cast<size_t>(s.row) + 1]++)] = s;
+    for (size_t i = 0; i < chunk.cells.size(); ++i)
+      cells[static_cast<size_t>(cursor[static_cast<size_t>(chunk.cellRows[i]) + 1]++)] =
+          chunk.cells[i];
     const auto base = static_cast<int32_t>(seamTexels.size());
     for (SeamSample s : chunk.seams) {
       s.begin += base;
@@ -405,7 +417,8 @@ void GeodesicSolver::Gradients::divergence(const double* u, double* div) {
           const double fx = s.fx, fy = s.fy;
           const double gx = (1 - fy) * (v[1] - v[0]) + fy * (v[3] - v[2]);
           const double gy = (1 - fx) * (v[2] - v[0]) + fx * (v[3] - v[1]);
-          const Eigen::Vector2d x = direction(gx, gy, s.hxx, s.hxy, s.hyy, s.weight);
+          const FaceMetric& m = faceMetrics[static_cast<size_t>(s.face)];
+          const Eigen::Vector2d x = direction(gx, gy, m.hxx, m.hxy, m.hyy, s.area * m.root);
           const std::array<double, 4> c{-(1 - fy) * x.x() - (1 - fx) * x.y(),
                                         (1 - fy) * x.x() - fx * x.y(),
                                         -fy * x.x() + (1 - fx) * x.y(), fy * x.x() + fx * x.y()};
@@ -415,12 +428,19 @@ void GeodesicSolver::Gradients::divergence(const double* u, double* div) {
       });
     }
   });
-  for (const SeamSample& s : seams) {
-    Eigen::Vector2d grad = Eigen::Vector2d::Zero();
-    for (int32_t k = s.begin; k < s.end; ++k) grad += u[seamTexels[k]] * seamGradients[k];
-    const Eigen::Vector2d x = direction(grad.x(), grad.y(), s.hxx, s.hxy, s.hyy, s.weight);
-    for (int32_t k = s.begin; k < s.end; ++k) div[seamTexels[k]] += seamGradients[k].dot(x);
-  }
+  // Seam samples share texels in no fixed pattern: directions in parallel, sums in order.
+  seamDirections.resize(seams.size());
+  arena.execute([&] {
+    tbb::parallel_for(size_t(0), seams.size(), [&](size_t i) {
+      const SeamSample& s = seams[i];
+      Eigen::Vector2d grad = Eigen::Vector2d::Zero();
+      for (int32_t k = s.begin; k < s.end; ++k) grad += u[seamTexels[k]] * seamGradients[k];
+      seamDirections[i] = direction(grad.x(), grad.y(), s.hxx, s.hxy, s.hyy, s.weight);
+    });
+  });
+  for (size_t i = 0; i < seams.size(); ++i)
+    for (int32_t k = seams[i].begin; k < seams[i].end; ++k)
+      div[seamTexels[k]] += seamGradients[k].dot(seamDirections[i]);
 }
 
 GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options)

@@ -2,6 +2,10 @@
 // CHOLMOD, moving blocks between double (app side) and the cycle precision.
 #include "texgrad/apps/system_solver.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
+
 #include <chrono>
 #include <cmath>
 
@@ -20,6 +24,78 @@ double relativeResidual(const Eigen::SparseMatrix<double>& a, const Eigen::Matri
                         const Eigen::MatrixXd& x) {
   const double norm = b.norm();
   return norm > 0 ? (b - a * x).norm() / norm : (a * x).norm();
+}
+
+
+/// Rows per task in the parallel vector kernels below (fixed: results do not depend on threads).
+constexpr Eigen::Index kRowsPerTask = 1 << 14;
+
+/// Deterministic parallel sum of f(begin, end) over row blocks of [0, n).
+template <typename F>
+double sumOverRows(Eigen::Index n, F&& f) {
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<Eigen::Index>(0, n, kRowsPerTask), 0.0,
+      [&](const tbb::blocked_range<Eigen::Index>& range, double acc) {
+        return acc + f(range.begin(), range.end());
+      },
+      [](double u, double v) { return u + v; });
+}
+
+double residual(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,
+                const Eigen::MatrixXd& x, Eigen::MatrixXd& r) {
+  r.resize(b.rows(), b.cols());
+  const int* outer = a.outerIndexPtr();
+  const int* inner = a.innerIndexPtr();
+  const double* values = a.valuePtr();
+  // Column i of the symmetric A is row i, so each task writes only its own rows.
+  return sumOverRows(b.rows(), [&](Eigen::Index begin, Eigen::Index end) {
+    double acc = 0.0;
+    for (Eigen::Index c = 0; c < b.cols(); ++c) {
+      const double* xc = x.col(c).data();
+      for (Eigen::Index i = begin; i < end; ++i) {
+        double v = b(i, c);
+        for (int e = outer[i]; e < outer[i + 1]; ++e) v -= values[e] * xc[inner[e]];
+        r(i, c) = v;
+        acc += v * v;
+      }
+    }
+    return acc;
+  });
+}
+
+double shiftResidual(Eigen::MatrixXd& r, const Eigen::MatrixXd& previousB,
+                     const Eigen::MatrixXd& b) {
+  return sumOverRows(b.rows(), [&](Eigen::Index begin, Eigen::Index end) {
+    double acc = 0.0;
+    for (Eigen::Index c = 0; c < b.cols(); ++c)
+      for (Eigen::Index i = begin; i < end; ++i) {
+        const double v = r(i, c) + (b(i, c) - previousB(i, c));
+        r(i, c) = v;
+        acc += v * v;
+      }
+    return acc;
+  });
+}
+
+double addInPlace(Eigen::MatrixXd& x, const Eigen::MatrixXd& z) {
+  return sumOverRows(x.rows(), [&](Eigen::Index begin, Eigen::Index end) {
+    double acc = 0.0;
+    for (Eigen::Index c = 0; c < x.cols(); ++c)
+      for (Eigen::Index i = begin; i < end; ++i) {
+        x(i, c) += z(i, c);
+        acc += z(i, c) * z(i, c);
+      }
+    return acc;
+  });
+}
+
+bool sameValues(const Eigen::MatrixXd& u, const Eigen::MatrixXd& v) {
+  return sumOverRows(u.rows(), [&](Eigen::Index begin, Eigen::Index end) {
+           for (Eigen::Index c = 0; c < u.cols(); ++c)
+             for (Eigen::Index i = begin; i < end; ++i)
+               if (u(i, c) != v(i, c)) return 1.0;
+           return 0.0;
+         }) == 0.0;
 }
 
 }  // namespace
@@ -54,8 +130,15 @@ struct SystemSolver::Impl {
   CholmodSolver direct;
   Eigen::SparseMatrix<double> a;
   double initTime = 0.0, updateTime = 0.0;
+  tbb::task_arena arena;
+  /// Refinement state: residual r = b - A x, correction z, and the b and x r belongs to.
+  Eigen::MatrixXd r, z, lastX, lastB;
+  bool cacheValid = false;
 
-  Impl(const TexelGrid& g, const SolverSettings& s) : grid(g), settings(s) {
+  Impl(const TexelGrid& g, const SolverSettings& s)
+      : grid(g),
+        settings(s),
+        arena(s.multigrid.threads > 0 ? s.multigrid.threads : tbb::task_arena::automatic) {
     settings.validate();
     if (settings.kind == SolverKind::Direct) return;
     if (settings.singlePrecision && settings.kind == SolverKind::Multigrid)
@@ -86,24 +169,43 @@ struct SystemSolver::Impl {
   /// cycle corrects x by V(b - A x), so accuracy is not limited by float rounding of A x.
   SolveReport refinedCycles(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, int count) {
     SolveReport report;
-    const double norm = b.norm() > 0 ? b.norm() : 1.0;
-    Eigen::MatrixXd r = b - a * x, z;
-    report.residuals.push_back(r.norm() / norm);
     const auto start = std::chrono::steady_clock::now();
-    for (int k = 0; k < count; ++k) {
-      multigridFloat->precondition(r, z);
-      x += z;
-      r = b - a * x;
-      ++report.iterations;
-      report.residuals.push_back(r.norm() / norm);
-      report.rmsChange.push_back(z.norm() / std::sqrt(static_cast<double>(std::max<Eigen::Index>(1, z.size()))));
-      if (settings.tolerance > 0 && report.residuals.back() <= settings.tolerance) {
-        report.converged = true;
-        break;
+    arena.execute([&] {
+      const double norm = b.norm() > 0 ? b.norm() : 1.0;
+      report.residuals.push_back(std::sqrt(initialResidual(b, x)) / norm);
+      for (int k = 0; k < count; ++k) {
+        multigridFloat->precondition(r, z);
+        const double change = addInPlace(x, z);
+        const double rr = residual(a, b, x, r);
+        ++report.iterations;
+        report.residuals.push_back(std::sqrt(rr) / norm);
+        report.rmsChange.push_back(
+            std::sqrt(change / static_cast<double>(std::max<Eigen::Index>(1, z.size()))));
+        if (settings.tolerance > 0 && report.residuals.back() <= settings.tolerance) {
+          report.converged = true;
+          break;
+        }
       }
-    }
+      remember(b, x);
+    });
     report.times.other = secondsSince(start);
     return report;
+  }
+
+  /// r = b - A x and ||r||^2; reuses the residual left by the previous solve when x is the
+  /// iterate that solve returned (interactive refinement): then r = r_prev + (b - b_prev).
+  double initialResidual(const Eigen::MatrixXd& b, const Eigen::MatrixXd& x) {
+    if (cacheValid && lastX.rows() == x.rows() && lastX.cols() == x.cols() &&
+        lastB.cols() == b.cols() && sameValues(lastX, x))
+      return shiftResidual(r, lastB, b);
+    return residual(a, b, x, r);
+  }
+
+  /// Keeps x, b (r is already b - A x) for initialResidual.
+  void remember(const Eigen::MatrixXd& b, const Eigen::MatrixXd& x) {
+    lastX = x;
+    lastB = b;
+    cacheValid = true;
   }
 
   SolveReport directSolve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
@@ -164,6 +266,8 @@ void SystemSolver::init(const Eigen::SparseMatrix<double>& pattern) {
 void SystemSolver::update(const Eigen::SparseMatrix<double>& a) {
   const auto start = std::chrono::steady_clock::now();
   impl_->a = a;
+  impl_->a.makeCompressed();
+  impl_->cacheValid = false;
   if (impl_->settings.kind == SolverKind::Direct)
     impl_->direct.factorize(a);
   else

@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <type_traits>
 #include <vector>
 
@@ -17,104 +18,195 @@ namespace texgrad::detail {
 template <int N>
 using IntC = std::integral_constant<int, N>;
 
-/// Calls fn(chunk, stride, c0) over channel chunks of at most 4; chunk and stride are compile-time
-/// constants (stride 0 = the runtime k).
+/// Calls fn(K) with K the channel count as a compile-time constant for k <= 4, else K = 0 (the
+/// runtime k).
 template <typename Fn>
-void forChannelChunks(int k, Fn&& fn) {
+void withChannels(int k, Fn&& fn) {
   switch (k) {
-    case 1: fn(IntC<1>{}, IntC<1>{}, 0); return;
-    case 2: fn(IntC<2>{}, IntC<2>{}, 0); return;
-    case 3: fn(IntC<3>{}, IntC<3>{}, 0); return;
-    case 4: fn(IntC<4>{}, IntC<4>{}, 0); return;
-    default: break;
-  }
-  int c0 = 0;
-  for (; c0 + 4 <= k; c0 += 4) fn(IntC<4>{}, IntC<0>{}, c0);
-  switch (k - c0) {
-    case 1: fn(IntC<1>{}, IntC<0>{}, c0); break;
-    case 2: fn(IntC<2>{}, IntC<0>{}, c0); break;
-    case 3: fn(IntC<3>{}, IntC<0>{}, c0); break;
-    default: break;
+    case 1: fn(IntC<1>{}); return;
+    case 2: fn(IntC<2>{}); return;
+    case 3: fn(IntC<3>{}); return;
+    case 4: fn(IntC<4>{}); return;
+    default: fn(IntC<0>{}); return;
   }
 }
 
 /// Rows per TBB task in grid loops (a row is a few hundred to a few thousand slots).
 constexpr size_t kRowGrain = 4;
 
-/// Gauss–Seidel on slots of one x parity in a row: x = (b - sum_{k != centre} w_k x_k) / w_centre.
-template <typename T, int KC, int S>
-void relaxRowParity(const SlotRow& row, int parity, const T* stencil, const SlotKind* kind,
-                    const T* b, T* x, int k, int c0) {
-  const int64_t stride = S > 0 ? S : k;
-  const int64_t w = row.width;
-  const int64_t off[9] = {-w - 1, -w, -w + 1, -1, 0, 1, w - 1, w, w + 1};
-  for (int64_t s = row.begin + ((parity ^ row.xParity) & 1); s < row.end; s += 2) {
-    if (kind[s] != SlotKind::Interior) continue;
-    const T* ws = stencil + s * 9;
-    T acc[KC];
-    for (int c = 0; c < KC; ++c) acc[c] = b[s * stride + c0 + c];
-    for (int j = 0; j < 9; ++j) {
-      if (j == 4) continue;
-      const T* xn = x + (s + off[j]) * stride + c0;
-      for (int c = 0; c < KC; ++c) acc[c] -= ws[j] * xn[c];
+/// Sum of the 8 off-centre stencil terms at slot 2i of a colour run (fixed association order,
+/// so every channel count and thread count rounds alike). up / mid / down point at the run's
+/// first slot in the rows y - 1, y, y + 1; `st` is the channel stride.
+template <typename T>
+inline T offCentreSum(const T* w, int64_t n, int64_t i, const T* up, const T* mid, const T* down,
+                      int64_t st) {
+  const int64_t j = 2 * i * st;
+  return ((w[i] * up[j - st] + w[n + i] * up[j]) + (w[2 * n + i] * up[j + st] + w[3 * n + i] * mid[j - st])) +
+         ((w[5 * n + i] * mid[j + st] + w[6 * n + i] * down[j - st]) +
+          (w[7 * n + i] * down[j] + w[8 * n + i] * down[j + st]));
+}
+
+/// Gauss–Seidel on one colour run, K channels per slot (stencil read once per slot):
+/// x_s = (b_s - sum_{k != centre} w_k x_k) / w_centre where the mask plane is non-zero. `mid` and
+/// `x` alias the same row but touch disjoint slots (x the colour being relaxed, mid its
+/// neighbours of the other colour).
+template <typename T, int K>
+void relaxRun(int64_t n, const T* __restrict w, const T* __restrict b, const T* __restrict up,
+              const T* __restrict mid, const T* __restrict down, T* __restrict x) {
+  const T* inverse = w + kInverseDiagonal * n;
+  for (int64_t i = 0; i < n; ++i)
+    for (int c = 0; c < K; ++c) {
+      const int64_t j = 2 * i * K + c;
+      const T value = inverse[i] * (b[j] - offCentreSum(w, n, i, up + c, mid + c, down + c, K));
+      const T old = x[j];
+      x[j] = value + (inverse[i] == T(0) ? old : T(0));  // select by addition: vectorises
     }
-    const T inv = T(1) / ws[4];
-    for (int c = 0; c < KC; ++c) x[s * stride + c0 + c] = acc[c] * inv;
+}
+
+/// relaxRun on the run of colour q in `row` (channel count K, 0 = runtime k).
+template <typename T, int K>
+void relaxRowColour(const SlotRow& row, int q, const T* stencil, const T* b, T* x, int k) {
+  const int64_t n = row.runLength(q);
+  if (n <= 0) return;
+  const int64_t st = K > 0 ? K : k;
+  const int64_t s0 = (row.begin + q) * st, w = row.width * st;
+  const T* coeffs = stencil + row.coeffsOf(q);
+  if constexpr (K > 0) {
+    relaxRun<T, K>(n, coeffs, b + s0, x + s0 - w, x + s0, x + s0 + w, x + s0);
+  } else {
+    // Runtime channel count: same arithmetic, strided by k.
+    const T* inverse = coeffs + kInverseDiagonal * n;
+    for (int c = 0; c < k; ++c)
+      for (int64_t i = 0; i < n; ++i) {
+        const int64_t j = s0 + c + 2 * i * st;
+        const T value = inverse[i] * (b[j] - offCentreSum(coeffs, n, i, x + s0 - w + c,
+                                                          x + s0 + c, x + s0 + w + c, st));
+        if (inverse[i] != T(0)) x[j] = value;
+      }
   }
 }
 
-/// One symmetric-ordered Gauss–Seidel sweep over all interior slots with boundary values locked
-/// (Fig. 8 R.2–R.3 fused): colours (y, x) parity 00, 01, 10, 11 forward, the reverse backward.
-/// Same-colour slots do not couple, so rows run in parallel and the result is thread-independent.
-template <typename T>
-void relaxInterior(const LevelSystem& sys, const T* stencil, const T* b, T* x, int k,
-                   bool forward) {
-  const SlotKind* kind = sys.kind.data();
-  for (int phase = 0; phase < 2; ++phase) {
-    const int yParity = forward ? phase : 1 - phase;
-    const std::vector<SlotRow>& rows = sys.rows[yParity];
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, rows.size(), kRowGrain),
-                      [&](const tbb::blocked_range<size_t>& range) {
-      forChannelChunks(k, [&](auto chunk, auto stride, int c0) {
-        for (size_t i = range.begin(); i != range.end(); ++i) {
-          for (int q = 0; q < 2; ++q) {
-            const int parity = forward ? q : 1 - q;
-            relaxRowParity<T, decltype(chunk)::value, decltype(stride)::value>(
-                rows[i], parity, stencil, kind, b, x, k, c0);
-          }
+/// r = b - A x on the slots of one colour run (one channel), 0 where the mask plane is 0.
+template <typename T, int K>
+void residualRun(int64_t n, const T* __restrict w, const T* __restrict b, const T* __restrict up,
+                 const T* __restrict mid, const T* __restrict down, T* __restrict r) {
+  const T* inverse = w + kInverseDiagonal * n;
+  for (int64_t i = 0; i < n; ++i)
+    for (int c = 0; c < K; ++c) {
+      const int64_t j = 2 * i * K + c;
+      const T value = b[j] - (offCentreSum(w, n, i, up + c, mid + c, down + c, K) +
+                              w[4 * n + i] * mid[j]);
+      r[j] = inverse[i] == T(0) ? T(0) : value;
+    }
+}
+
+/// r = b - A x on both colours of one run (channel count K, 0 = runtime k); 0 on masked slots.
+template <typename T, int K>
+void residualRow(const SlotRow& row, const T* stencil, const T* b, const T* x, T* r, int k) {
+  for (int q = 0; q < 2; ++q) {
+    const int64_t n = row.runLength(q);
+    const T* w = stencil + row.coeffsOf(q);
+    if constexpr (K > 0) {
+      const int64_t s0 = (row.begin + q) * K, wd = row.width * K;
+      residualRun<T, K>(n, w, b + s0, x + s0 - wd, x + s0, x + s0 + wd, r + s0);
+    } else {
+      const int64_t s0 = (row.begin + q) * k, wd = int64_t(row.width) * k;
+      for (int c = 0; c < k; ++c)
+        for (int64_t m = 0; m < n; ++m) {
+          const int64_t j = s0 + c + 2 * m * k;
+          const T value = b[j] - (offCentreSum(w, n, m, x + s0 - wd + c, x + s0 + c,
+                                               x + s0 + wd + c, k) +
+                                  w[4 * n + m] * x[j]);
+          r[j] = w[kInverseDiagonal * n + m] == T(0) ? T(0) : value;
         }
-      });
-    });
+    }
   }
+}
+
+/// Relaxes box row i at half-sweep h (sweep h / 2, phase h % 2) if the row has that phase's y
+/// parity: colours (y, x) parity 00, 01, 10, 11 forward, the reverse backward.
+template <typename T, int K>
+void relaxNode(const LevelSystem& sys, int64_t i, int h, bool forward, const T* stencil,
+               const T* b, T* x, int k) {
+  const SlotRow& row = sys.boxRows[static_cast<size_t>(i)];
+  if (row.begin == row.end || row.yParity != (forward ? (h & 1) : 1 - (h & 1))) return;
+  for (int p = 0; p < 2; ++p)
+    relaxRowColour<T, K>(row, ((forward ? p : 1 - p) ^ row.xParity) & 1, stencil, b, x, k);
+}
+
+/// The half-sweeps [0, halves) of a band that need no row of a neighbouring band: row i at
+/// half-sweep h reads rows i +- 1 at h - 1, so a cut side loses one row per half-sweep
+/// (a trapezoid). Rows advance as a wavefront, so the band's stencils are read once.
+/// With r, also the residual of every row whose neighbours are final within the trapezoid
+/// (row i once the wavefront has passed row i + 1), while its stencils are still in cache.
+template <typename T, int K>
+void relaxBandInterior(const LevelSystem& sys, const RowBand& band, int halves, bool forward,
+                       const T* stencil, const T* b, T* x, T* r, int k) {
+  const int64_t lo = band.first + (band.cutBelow ? halves : 0);
+  const int64_t hi = band.end - (band.cutAbove ? halves : 0);
+  for (int64_t step = band.first; step < band.end + halves; ++step) {
+    for (int h = 0; h < halves; ++h) {
+      const int64_t i = step - h;
+      if (i < band.first + (band.cutBelow ? h : 0) || i >= band.end - (band.cutAbove ? h : 0))
+        continue;
+      relaxNode<T, K>(sys, i, h, forward, stencil, b, x, k);
+    }
+    const int64_t ready = step - halves;
+    if (r && ready >= lo && ready < hi)
+      residualRow<T, K>(sys.boxRows[static_cast<size_t>(ready)], stencil, b, x, r, k);
+  }
+}
+
+/// The rest of the half-sweeps around the cut between two bands at box row m: rows
+/// [m - h, m + h) at half-sweep h, after both neighbouring trapezoids.
+/// With r, also the residual of rows [m - halves, m + halves), which the trapezoids left out.
+template <typename T, int K>
+void relaxBandSeam(const LevelSystem& sys, int64_t m, int halves, bool forward, const T* stencil,
+                   const T* b, T* x, T* r, int k) {
+  for (int h = 1; h < halves; ++h)
+    for (int64_t i = m - h; i < m + h; ++i) relaxNode<T, K>(sys, i, h, forward, stencil, b, x, k);
+  if (r)
+    for (int64_t i = m - halves; i < m + halves; ++i)
+      residualRow<T, K>(sys.boxRows[static_cast<size_t>(i)], stencil, b, x, r, k);
+}
+
+/// `sweeps` symmetric-ordered Gauss–Seidel sweeps over all interior slots with boundary values
+/// locked (Fig. 8 R.2–R.3 fused), cache-blocked: bands run their trapezoids in parallel, then
+/// the seams between bands. Every row update sees the same neighbour values as in plain
+/// sweep-by-sweep order, so the result equals it bit for bit for any thread count. With r
+/// (not null), r = b - A x on the interior slots of every run afterwards, as interiorResidual.
+template <typename T>
+void relaxInterior(const LevelSystem& sys, const T* stencil, const T* b, T* x, int k, int sweeps,
+                   bool forward, T* r = nullptr) {
+  constexpr int kMaxSweepsPerPass = static_cast<int>((kBandRows - 2) / 4);
+  withChannels(k, [&](auto K) {
+    constexpr int Kc = decltype(K)::value;
+    for (int done = 0; done < sweeps; done += kMaxSweepsPerPass) {
+      const int halves = 2 * std::min(kMaxSweepsPerPass, sweeps - done);
+      T* residual = done + kMaxSweepsPerPass >= sweeps ? r : nullptr;  // last pass only
+      tbb::parallel_for(size_t(0), sys.bands.size(), [&](size_t i) {
+        relaxBandInterior<T, Kc>(sys, sys.bands[i], halves, forward, stencil, b, x, residual, k);
+      });
+      tbb::parallel_for(size_t(0), sys.bands.size(), [&](size_t i) {
+        if (sys.bands[i].cutBelow)
+          relaxBandSeam<T, Kc>(sys, sys.bands[i].first, halves, forward, stencil, b, x, residual,
+                               k);
+      });
+    }
+  });
 }
 
 /// r = b - A x on interior slots and r = 0 on the other slots of interior rows.
 template <typename T>
 void interiorResidual(const LevelSystem& sys, const T* stencil, const T* b, const T* x, T* r,
                       int k) {
-  const SlotKind* kind = sys.kind.data();
-  for (int yParity = 0; yParity < 2; ++yParity) {
-    const std::vector<SlotRow>& rows = sys.rows[yParity];
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, rows.size(), kRowGrain),
+  withChannels(k, [&](auto K) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, sys.boxRows.size(), kRowGrain),
                       [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t i = range.begin(); i != range.end(); ++i) {
-        const int64_t w = rows[i].width;
-        const int64_t off[9] = {-w - 1, -w, -w + 1, -1, 0, 1, w - 1, w, w + 1};
-        for (int64_t s = rows[i].begin; s < rows[i].end; ++s) {
-          if (kind[s] != SlotKind::Interior) {
-            for (int c = 0; c < k; ++c) r[s * k + c] = T(0);
-            continue;
-          }
-          const T* ws = stencil + s * 9;
-          for (int c = 0; c < k; ++c) {
-            T acc = b[s * k + c];
-            for (int j = 0; j < 9; ++j) acc -= ws[j] * x[(s + off[j]) * k + c];
-            r[s * k + c] = acc;
-          }
-        }
-      }
+      for (size_t i = range.begin(); i != range.end(); ++i)
+        residualRow<T, decltype(K)::value>(sys.boxRows[i], stencil, b, x, r, k);
     });
-  }
+  });
 }
 
 /// Accumulates, per boundary row j and channel c, out(j, c) = b - sum over csr row j of A x.
@@ -137,14 +229,52 @@ void boundaryRowsResidual(const LevelSystem& sys, const SlotCsr& csr, const T* b
 }
 
 /// Boundary direct solve with interior locked (Fig. 8 R.4–R.5 / P.3–P.4), in double precision.
+/// With r (not null) holding b - A x on interior slots, r is kept equal to it for the new
+/// boundary values: r_s -= A_sj (x_j new - x_j old) on interior slots next to boundary slots.
 template <typename T>
-void solveBoundary(const LevelSystem& sys, const T* b, T* x, int k, Eigen::MatrixXd& work) {
+void solveBoundary(const LevelSystem& sys, const T* b, T* x, int k, Eigen::MatrixXd& work,
+                   T* r = nullptr) {
   if (sys.boundaryCount() == 0) return;
   boundaryRowsResidual(sys, sys.offBlock, b, x, k, work);
   sys.boundarySolver.solveInPlace(work);
   for (int j = 0; j < sys.boundaryCount(); ++j)
+    for (int c = 0; c < k; ++c) {
+      T& xj = x[sys.boundarySlots[static_cast<size_t>(j)] * k + c];
+      const T updated = static_cast<T>(work(j, c));
+      work(j, c) = static_cast<double>(updated) - static_cast<double>(xj);
+      xj = updated;
+    }
+  if (!r) return;
+  const SlotCsr& fix = sys.interiorNextToBoundary;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, sys.fixupSlots.size(), 1024),
+                    [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i != range.end(); ++i)
+      for (int c = 0; c < k; ++c) {
+        double acc = 0.0;
+        for (int64_t e = fix.ptr[i]; e < fix.ptr[i + 1]; ++e)
+          acc += fix.val[static_cast<size_t>(e)] * work(fix.col[static_cast<size_t>(e)], c);
+        r[sys.fixupSlots[i] * k + c] -= static_cast<T>(acc);
+      }
+  });
+}
+
+/// r = 0 on boundary slots: right after the boundary solve (Fig. 8 R.5) the boundary rows
+/// A_bi x_i + A_bb x_b = b_b hold up to rounding, so R.6 needs no pass over them.
+template <typename T>
+void clearBoundaryResidual(const LevelSystem& sys, T* r, int k) {
+  for (const int64_t s : sys.boundarySlots)
+    for (int c = 0; c < k; ++c) r[s * k + c] = T(0);
+}
+
+/// r = b - A x on boundary slots (Fig. 8 R.6, before R^l).
+template <typename T>
+void boundaryResidual(const LevelSystem& sys, const T* b, const T* x, T* r, int k,
+                      Eigen::MatrixXd& work) {
+  if (sys.boundaryCount() == 0) return;
+  boundaryRowsResidual(sys, sys.fullRows, b, x, k, work);
+  for (int j = 0; j < sys.boundaryCount(); ++j)
     for (int c = 0; c < k; ++c)
-      x[sys.boundarySlots[static_cast<size_t>(j)] * k + c] = static_cast<T>(work(j, c));
+      r[sys.boundarySlots[static_cast<size_t>(j)] * k + c] = static_cast<T>(work(j, c));
 }
 
 /// Complete residual r = b - A x on every slot (empty slots hold 0) (Fig. 8 R.6, before R^l).
@@ -152,11 +282,7 @@ template <typename T>
 void levelResidual(const LevelSystem& sys, const T* stencil, const T* b, const T* x, T* r, int k,
                    Eigen::MatrixXd& work) {
   interiorResidual(sys, stencil, b, x, r, k);
-  if (sys.boundaryCount() == 0) return;
-  boundaryRowsResidual(sys, sys.fullRows, b, x, k, work);
-  for (int j = 0; j < sys.boundaryCount(); ++j)
-    for (int c = 0; c < k; ++c)
-      r[sys.boundarySlots[static_cast<size_t>(j)] * k + c] = static_cast<T>(work(j, c));
+  boundaryResidual(sys, b, x, r, k, work);
 }
 
 /// One row of one box, for loops over every slot of a level.
@@ -175,63 +301,119 @@ inline T transferWeight(int f, int c) {
   return d == 0 ? T(1) : (d == 1 || d == -1) ? T(0.5) : T(0);
 }
 
-/// b^{l+1} = Pᵀ r^l on every non-empty coarse slot (Fig. 8 R.6).
+/// floor(v / 2) for any sign of v.
+inline int floorHalf(int v) { return v >> 1; }
+
+/// Row pointer of lattice row y of box `box` (nullptr if the row lies outside the box), at the
+/// slot of lattice x = box.x0.
+template <typename T>
+inline T* boxRow(const GridBox& box, int y, T* v, int64_t k) {
+  if (y < box.y0 || y >= box.y0 + box.height) return nullptr;
+  return v + box.slot(box.x0, y) * k;
+}
+
+/// Restricts one coarse row: bc(x, y) = sum over fine (2x + i, 2y + j), |i|, |j| <= 1 inside the
+/// fine box, of w_i w_j r (bilinear weights 1, 1/2). Slots without an unknown get values that are
+/// never read.
+template <typename T, int K>
+void restrictRow(const GridBox& fb, const GridBox& cb, int y, const T* r, T* bc, int kRuntime) {
+  const int64_t k = K > 0 ? K : kRuntime;
+  const T* rows[3] = {boxRow(fb, 2 * y - 1, r, k), boxRow(fb, 2 * y, r, k), boxRow(fb, 2 * y + 1, r, k)};
+  const T wy[3] = {T(0.5), T(1), T(0.5)};
+  T* out = bc + cb.slot(cb.x0, y) * k;
+  // Coarse columns whose three fine columns all lie in the fine box.
+  const int lo = std::max(cb.x0, floorHalf(fb.x0 + 1) + ((fb.x0 + 1) & 1));
+  const int hi = std::min(cb.x0 + cb.width - 1, floorHalf(fb.x0 + fb.width - 2));
+  for (int x = cb.x0; x < cb.x0 + cb.width; ++x) {
+    const bool inside = x >= lo && x <= hi;
+    if (inside && x == lo) {
+      const int64_t n = hi - lo + 1;
+      for (int64_t c = 0; c < k; ++c) {
+        T* o = out + (lo - cb.x0) * k + c;
+        for (int64_t i = 0; i < n; ++i) o[i * k] = T(0);
+        for (int j = 0; j < 3; ++j) {
+          if (!rows[j]) continue;
+          const T* f = rows[j] + (2 * lo - fb.x0) * k + c;
+          const T wj = wy[j];
+          for (int64_t i = 0; i < n; ++i)
+            o[i * k] += wj * ((T(0.5) * f[(2 * i - 1) * k] + f[2 * i * k]) + T(0.5) * f[(2 * i + 1) * k]);
+        }
+      }
+      x = hi;
+      continue;
+    }
+    for (int64_t c = 0; c < k; ++c) out[(x - cb.x0) * k + c] = T(0);
+    for (int j = 0; j < 3; ++j) {
+      if (!rows[j]) continue;
+      for (int fx = 2 * x - 1; fx <= 2 * x + 1; ++fx) {
+        if (fx < fb.x0 || fx >= fb.x0 + fb.width) continue;
+        const T wgt = wy[j] * transferWeight<T>(fx, x);
+        for (int64_t c = 0; c < k; ++c) out[(x - cb.x0) * k + c] += wgt * rows[j][(fx - fb.x0) * k + c];
+      }
+    }
+  }
+}
+
+/// b^{l+1} = Pᵀ r^l on every coarse slot (Fig. 8 R.6); values at slots without an unknown are
+/// never read.
 template <typename T>
 void restrictResidual(const GridLevel& fine, const GridLevel& coarse,
                       const std::vector<BoxRow>& coarseRows, const T* r, T* bc, int k) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, coarseRows.size(), kRowGrain),
-                    [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i != range.end(); ++i) {
-      const GridBox& cb = coarse.boxes[static_cast<size_t>(coarseRows[i].box)];
-      const GridBox& fb = fine.boxes[static_cast<size_t>(fine.boxOfChart[static_cast<size_t>(cb.chart)])];
-      const int y = coarseRows[i].y;
-      for (int x = cb.x0; x < cb.x0 + cb.width; ++x) {
-        const int64_t s = cb.slot(x, y);
-        if (coarse.unknownOfSlot[static_cast<size_t>(s)] < 0) continue;
-        for (int c = 0; c < k; ++c) bc[s * k + c] = T(0);
-        for (int fy = 2 * y - 1; fy <= 2 * y + 1; ++fy) {
-          for (int fx = 2 * x - 1; fx <= 2 * x + 1; ++fx) {
-            if (!fb.contains(fx, fy)) continue;
-            const T wgt = transferWeight<T>(fx, x) * transferWeight<T>(fy, y);
-            const T* rf = r + fb.slot(fx, fy) * k;
-            for (int c = 0; c < k; ++c) bc[s * k + c] += wgt * rf[c];
-          }
-        }
+  withChannels(k, [&](auto K) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, coarseRows.size(), kRowGrain),
+                      [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t i = range.begin(); i != range.end(); ++i) {
+        const GridBox& cb = coarse.boxes[static_cast<size_t>(coarseRows[i].box)];
+        const GridBox& fb = fine.boxes[static_cast<size_t>(fine.boxOfChart[static_cast<size_t>(cb.chart)])];
+        restrictRow<T, decltype(K)::value>(fb, cb, coarseRows[i].y, r, bc, k);
+      }
+    });
+  });
+}
+
+/// Adds the bilinear interpolation of one or two coarse rows to one fine row on slots whose
+/// kind is not Empty: xf(x) += wy (c(x / 2)) for even x, wy (c(x / 2) + c(x / 2 + 1)) / 2 for odd x.
+template <typename T, int K>
+void prolongRow(const GridBox& fb, const GridBox& cb, int y, const SlotKind* kind, const T* xc,
+                T* xf, int kRuntime) {
+  const int64_t k = K > 0 ? K : kRuntime;
+  const T* c0 = xc + cb.slot(cb.x0, y >> 1) * k;
+  const T* c1 = xc + cb.slot(cb.x0, (y + 1) >> 1) * k;
+  const bool odd = y & 1;
+  const int64_t s0 = fb.slot(fb.x0, y);
+  const SlotKind* kd = kind + s0;
+  T* out = xf + s0 * k;
+  // Fine x = 2 m + parity with coarse index m - cb.x0 (and m + 1 - cb.x0 for odd x).
+  for (int parity = 0; parity < 2; ++parity) {
+    int x = fb.x0 + ((fb.x0 & 1) != parity ? 1 : 0);
+    const int64_t n = (fb.x0 + fb.width - x + 1) / 2;
+    const int64_t m0 = (x >> 1) - cb.x0, f0 = x - fb.x0;
+    for (int64_t c = 0; c < k; ++c) {
+      for (int64_t i = 0; i < n; ++i) {
+        const int64_t m = (m0 + i) * k + c;
+        const T h0 = parity ? T(0.5) * (c0[m] + c0[m + k]) : c0[m];
+        const T h1 = parity ? T(0.5) * (c1[m] + c1[m + k]) : c1[m];
+        const T v = odd ? T(0.5) * (h0 + h1) : h0;
+        const int64_t f = (f0 + 2 * i) * k + c;
+        out[f] += kd[f0 + 2 * i] != SlotKind::Empty ? v : T(0);
       }
     }
-  });
+  }
 }
 
 /// x^l += P x^{l+1} on every non-empty fine slot (Fig. 8 P.2).
 template <typename T>
-void prolongCorrection(const GridLevel& fine, const GridLevel& coarse,
+void prolongCorrection(const GridLevel& fine, const GridLevel& coarse, const SlotKind* fineKind,
                        const std::vector<BoxRow>& fineRows, const T* xc, T* xf, int k) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, fineRows.size(), kRowGrain),
-                    [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i != range.end(); ++i) {
-      const GridBox& fb = fine.boxes[static_cast<size_t>(fineRows[i].box)];
-      const GridBox& cb = coarse.boxes[static_cast<size_t>(coarse.boxOfChart[static_cast<size_t>(fb.chart)])];
-      const int y = fineRows[i].y;
-      const int cy0 = y >> 1, cy1 = (y + 1) >> 1;
-      const T wy = (y & 1) ? T(0.5) : T(1);
-      for (int x = fb.x0; x < fb.x0 + fb.width; ++x) {
-        const int64_t s = fb.slot(x, y);
-        if (fine.unknownOfSlot[static_cast<size_t>(s)] < 0) continue;
-        const int cx0 = x >> 1, cx1 = (x + 1) >> 1;
-        const T wx = (x & 1) ? T(0.5) : T(1);
-        const T* p00 = xc + cb.slot(cx0, cy0) * k;
-        const T* p01 = xc + cb.slot(cx1, cy0) * k;
-        const T* p10 = xc + cb.slot(cx0, cy1) * k;
-        const T* p11 = xc + cb.slot(cx1, cy1) * k;
-        const bool oddX = x & 1, oddY = y & 1;
-        for (int c = 0; c < k; ++c) {
-          T v = p00[c];
-          if (oddX) v += p01[c];
-          if (oddY) v += p10[c] + (oddX ? p11[c] : T(0));
-          xf[s * k + c] += wx * wy * v;
-        }
+  withChannels(k, [&](auto K) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, fineRows.size(), kRowGrain),
+                      [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t i = range.begin(); i != range.end(); ++i) {
+        const GridBox& fb = fine.boxes[static_cast<size_t>(fineRows[i].box)];
+        const GridBox& cb = coarse.boxes[static_cast<size_t>(coarse.boxOfChart[static_cast<size_t>(fb.chart)])];
+        prolongRow<T, decltype(K)::value>(fb, cb, fineRows[i].y, fineKind, xc, xf, k);
       }
-    }
+    });
   });
 }
 

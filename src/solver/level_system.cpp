@@ -3,6 +3,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <string>
@@ -30,22 +31,48 @@ bool rowIsStencil(const GridLevel& level, const Eigen::SparseMatrix<double>& pat
   return true;
 }
 
+/// Interior run of box row r (an empty run if the row has no interior slot).
+SlotRow interiorRun(const GridBox& box, int r, const LevelSystem& system) {
+  const int64_t rowStart = box.offset + static_cast<int64_t>(r) * box.width;
+  int64_t first = -1, last = -1;
+  for (int64_t s = rowStart; s < rowStart + box.width; ++s) {
+    if (system.kind[static_cast<size_t>(s)] != SlotKind::Interior) continue;
+    if (first < 0) first = s;
+    last = s;
+  }
+  const int y = box.y0 + r;
+  if (first < 0) return {0, 0, box.width, 0, y & 1, 0};
+  const int x = box.x0 + static_cast<int>(first - rowStart);
+  return {first, last + 1, box.width, x & 1, y & 1, system.stencilSize};
+}
+
+/// Splits box rows [first, end) into bands of about kBandRows rows.
+void addBands(int64_t first, int64_t end, LevelSystem& system) {
+  const int64_t count = std::max<int64_t>(1, (end - first) / kBandRows);
+  for (int64_t b = 0; b < count; ++b)
+    system.bands.push_back({first + (end - first) * b / count,
+                            first + (end - first) * (b + 1) / count, b > 0, b + 1 < count});
+}
+
 void collectRows(const GridLevel& level, LevelSystem& system) {
   for (int p = 0; p < 2; ++p) system.rows[p].clear();
+  system.boxRows.clear();
+  system.bands.clear();
+  system.stencilSize = 0;
   for (const GridBox& box : level.boxes) {
+    const int64_t boxFirst = static_cast<int64_t>(system.boxRows.size());
+    int64_t boxEnd = boxFirst;
     for (int r = 1; r + 1 < box.height; ++r) {
-      const int64_t rowStart = box.offset + static_cast<int64_t>(r) * box.width;
-      int64_t first = -1, last = -1;
-      for (int64_t s = rowStart; s < rowStart + box.width; ++s) {
-        if (system.kind[static_cast<size_t>(s)] != SlotKind::Interior) continue;
-        if (first < 0) first = s;
-        last = s;
-      }
-      if (first < 0) continue;
-      const int x = box.x0 + static_cast<int>(first - rowStart);
-      const int y = box.y0 + r;
-      system.rows[y & 1].push_back({first, last + 1, box.width, x & 1});
+      const SlotRow row = interiorRun(box, r, system);
+      if (row.begin == row.end && boxEnd == boxFirst) continue;  // before the first interior row
+      system.boxRows.push_back(row);
+      if (row.begin == row.end) continue;
+      boxEnd = static_cast<int64_t>(system.boxRows.size());
+      system.stencilSize += kStencilPlanes * (row.runLength(0) + row.runLength(1));
+      system.rows[row.yParity].push_back(row);
     }
+    system.boxRows.resize(static_cast<size_t>(boxEnd));  // drop rows after the last interior row
+    if (boxEnd > boxFirst) addBands(boxFirst, boxEnd, system);
   }
 }
 
@@ -63,6 +90,27 @@ Eigen::SparseMatrix<double> boundaryBlock(const GridLevel& level,
   Eigen::SparseMatrix<double> bb(system.boundaryCount(), system.boundaryCount());
   bb.setFromTriplets(triplets.begin(), triplets.end());
   return bb;
+}
+
+/// Fills interiorNextToBoundary and fixupSlots from the columns of `a` at interior unknowns
+/// (A is symmetric, so column u holds row u).
+void assignInteriorNextToBoundary(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
+                                  LevelSystem& system) {
+  SlotCsr& fix = system.interiorNextToBoundary;
+  fix = {};
+  fix.ptr.push_back(0);
+  system.fixupSlots.clear();
+  for (int u : system.interiorUnknowns) {
+    for (SparseIt it(a, u); it; ++it) {
+      const int jb = system.boundaryOfUnknown[static_cast<size_t>(it.row())];
+      if (jb < 0) continue;
+      fix.col.push_back(jb);
+      fix.val.push_back(it.value());
+    }
+    if (static_cast<int64_t>(fix.col.size()) == fix.ptr.back()) continue;
+    fix.ptr.push_back(static_cast<int64_t>(fix.col.size()));
+    system.fixupSlots.push_back(level.slotOfUnknown[static_cast<size_t>(u)]);
+  }
 }
 
 }  // namespace
@@ -126,22 +174,34 @@ void assignBoundary(const GridLevel& level, const Eigen::SparseMatrix<double>& a
     off.ptr.push_back(static_cast<int64_t>(off.col.size()));
     full.ptr.push_back(static_cast<int64_t>(full.col.size()));
   }
+  assignInteriorNextToBoundary(level, a, system);
   if (system.boundaryCount() > 0) system.boundarySolver.factorize(boundaryBlock(level, a, system));
 }
 
 template <typename T>
 void assignStencils(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
                     const LevelSystem& system, std::vector<T>& stencils) {
-  stencils.resize(static_cast<size_t>(level.slotCount) * 9);
-  tbb::parallel_for(0, system.interiorCount(), [&](int i) {
-    const int u = system.interiorUnknowns[static_cast<size_t>(i)];
-    T* w = stencils.data() + level.slotOfUnknown[static_cast<size_t>(u)] * 9;
-    std::fill(w, w + 9, T(0));
-    for (SparseIt it(a, u); it; ++it) w[stencilIndex(level, u, static_cast<int>(it.row()))] = static_cast<T>(it.value());
-    if (!(w[4] > T(0)))
-      throw NumericalError("multigrid: diagonal entry of unknown " + std::to_string(u) +
-                           " is not positive; the system matrix must be positive definite");
-  });
+  stencils.assign(static_cast<size_t>(system.stencilSize), T(0));
+  auto fillRun = [&](const SlotRow& row, int q) {
+    const int64_t n = row.runLength(q);
+    T* w = stencils.data() + row.coeffsOf(q);
+    for (int64_t i = 0; i < n; ++i) {
+      const int64_t s = row.begin + q + 2 * i;
+      if (system.kind[static_cast<size_t>(s)] != SlotKind::Interior) continue;
+      const int u = level.unknownOfSlot[static_cast<size_t>(s)];
+      for (SparseIt it(a, u); it; ++it)
+        w[stencilIndex(level, u, static_cast<int>(it.row())) * n + i] = static_cast<T>(it.value());
+      const T centre = w[4 * n + i];
+      if (!(centre > T(0)))
+        throw NumericalError("multigrid: diagonal entry of unknown " + std::to_string(u) +
+                             " is not positive; the system matrix must be positive definite");
+      w[kInverseDiagonal * n + i] = T(1) / centre;
+    }
+  };
+  for (const std::vector<SlotRow>& rows : system.rows)
+    tbb::parallel_for(size_t(0), rows.size(), [&](size_t r) {
+      for (int q = 0; q < 2; ++q) fillRun(rows[r], q);
+    });
 }
 
 template void assignStencils<float>(const GridLevel&, const Eigen::SparseMatrix<double>&,

@@ -11,12 +11,38 @@
 
 namespace texgrad::detail {
 
-/// A run of slots in one box row that contains every interior slot of that row.
+/// Coefficient planes per slot of a stencil run: the 9 stencil weights, index
+/// (dy + 1) * 3 + (dx + 1), then 1 / w_centre on interior slots and 0 on the others (the mask).
+constexpr int kStencilPlanes = 10;
+/// Plane holding 1 / w_centre (0 marks a slot that relaxation and residuals skip).
+constexpr int kInverseDiagonal = 9;
+
+/// A run of slots in one box row that contains every interior slot of that row. Its stencils
+/// are stored by colour: the slots begin + q + 2i (q = 0, 1) have kStencilPlanes planes of
+/// runLength(q) coefficients each, q = 0 first, starting at `coeffs` (structure of arrays, so
+/// the relaxation of one colour reads every plane with unit stride).
 struct SlotRow {
   int64_t begin = 0, end = 0;  ///< slot range [begin, end)
   int width = 0;               ///< width of the box (row stride in slots)
   int xParity = 0;             ///< parity of the lattice x coordinate of slot `begin`
+  int yParity = 0;             ///< parity of the lattice y coordinate of the row
+  int64_t coeffs = 0;          ///< offset of this run's coefficients in the level's stencil array
+  /// Number of slots begin + q + 2i in the run.
+  int64_t runLength(int q) const { return (end - begin - q + 1) / 2; }
+  /// Offset of the coefficient planes of colour q.
+  int64_t coeffsOf(int q) const { return coeffs + (q ? kStencilPlanes * runLength(0) : 0); }
 };
+
+/// Box rows [first, end) of LevelSystem::boxRows relaxed as one cache-sized band; a cut side
+/// borders the next band of the same box (paper §6.2: cache-blocked relaxation).
+struct RowBand {
+  int64_t first = 0, end = 0;
+  bool cutBelow = false, cutAbove = false;
+};
+
+/// Rows per relaxation band: the sweeps of a V-cycle phase run over a band while its stencils
+/// stay in cache. A band must hold at least 4 n + 2 rows for n sweeps at once.
+constexpr int64_t kBandRows = 64;
 
 /// Compressed rows with slot-indexed columns (rows of A for the boundary unknowns).
 struct SlotCsr {
@@ -29,13 +55,22 @@ struct SlotCsr {
 struct LevelSystem {
   std::vector<SlotKind> kind;              ///< per slot
   std::vector<SlotRow> rows[2];            ///< rows with interior slots, by lattice y parity
+  /// Consecutive rows of each box from its first to its last row with interior slots (rows
+  /// without interior slots are empty runs), for the banded relaxation.
+  std::vector<SlotRow> boxRows;
+  std::vector<RowBand> bands;              ///< bands of boxRows, in order
   std::vector<int64_t> boundarySlots;      ///< compact boundary index -> slot
   std::vector<int32_t> boundaryOfUnknown;  ///< per unknown: compact boundary index or -1
   std::vector<int32_t> interiorUnknowns;   ///< unknowns relaxed by Gauss–Seidel
+  int64_t stencilSize = 0;                 ///< coefficients over all runs (kStencilPlanes per slot)
   int64_t nonZeros = 0;                    ///< non-zeros of A^l
   int64_t boundaryNonZeros = 0;            ///< non-zeros of A_bb^l
   SlotCsr offBlock;                        ///< A_bi^l: boundary rows, non-boundary columns
   SlotCsr fullRows;                        ///< [A_bi^l A_bb^l]: complete boundary rows
+  /// A_ib^l: per slot of fixupSlots (interior slots with a boundary neighbour), its entries with
+  /// the compact boundary index as column.
+  SlotCsr interiorNextToBoundary;
+  std::vector<int64_t> fixupSlots;         ///< interior slots with a boundary neighbour
   CholmodSolver boundarySolver;            ///< factorisation of A_bb^l
   int interiorCount() const { return static_cast<int>(interiorUnknowns.size()); }
   int boundaryCount() const { return static_cast<int>(boundarySlots.size()); }
@@ -50,8 +85,8 @@ void classifyLevel(const GridLevel& level, const Eigen::SparseMatrix<double>& pa
 void assignBoundary(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
                     LevelSystem& system);
 
-/// Numeric phase for the interior: 9 coefficients per slot, index (dy + 1) * 3 + (dx + 1), of
-/// the rows of `a` at interior unknowns (other slots are left untouched).
+/// Numeric phase for the interior: the stencil planes of every run (see SlotRow) from the rows of
+/// `a` at interior unknowns; the other slots of a run get zero coefficients and mask 0.
 template <typename T>
 void assignStencils(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
                     const LevelSystem& system, std::vector<T>& stencils);

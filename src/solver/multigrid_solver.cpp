@@ -215,16 +215,19 @@ struct MultigridSolver<Scalar>::Impl {
     });
   }
 
-  void relax(Level& lv, bool forward) {
+  /// Interior relaxation; with `residual`, also r = b - A x on interior slots (fused).
+  void relax(Level& lv, bool forward, bool residual = false) {
     const auto start = Clock::now();
-    for (int i = 0; i < options.sweeps; ++i)
-      detail::relaxInterior(lv.sys, lv.stencil.data(), lv.b.data(), lv.x.data(), channels, forward);
+    detail::relaxInterior(lv.sys, lv.stencil.data(), lv.b.data(), lv.x.data(), channels,
+                          options.sweeps, forward, residual ? lv.r.data() : nullptr);
     times.relaxation += secondsSince(start);
   }
 
-  void boundary(Level& lv) {
+  /// Boundary solve; with `residual`, keeps the interior residual of relax(.., true) current.
+  void boundary(Level& lv, bool residual = false) {
     const auto start = Clock::now();
-    detail::solveBoundary(lv.sys, lv.b.data(), lv.x.data(), channels, lv.work);
+    detail::solveBoundary(lv.sys, lv.b.data(), lv.x.data(), channels, lv.work,
+                          residual ? lv.r.data() : nullptr);
     times.boundary += secondsSince(start);
   }
 
@@ -250,11 +253,10 @@ struct MultigridSolver<Scalar>::Impl {
     for (int l = 0; l < L; ++l) {
       Level& lv = levels[static_cast<size_t>(l)];
       if (l > 0) std::fill(lv.x.begin(), lv.x.end(), T(0));
-      relax(lv, true);  // R.2–R.3
-      boundary(lv);     // R.4–R.5
+      relax(lv, true, true);  // R.2–R.3, and R.6 on interior slots
+      boundary(lv, true);     // R.4–R.5, interior residual kept current
       const auto start = Clock::now();
-      detail::levelResidual(lv.sys, lv.stencil.data(), lv.b.data(), lv.x.data(), lv.r.data(),
-                            channels, lv.work);  // R.6
+      detail::clearBoundaryResidual(lv.sys, lv.r.data(), channels);  // R.6 on boundary slots
       detail::restrictResidual(hierarchy.level(l), hierarchy.level(l + 1),
                                levels[static_cast<size_t>(l) + 1].boxRows, lv.r.data(),
                                levels[static_cast<size_t>(l) + 1].b.data(), channels);
@@ -264,7 +266,8 @@ struct MultigridSolver<Scalar>::Impl {
     for (int l = L - 1; l >= 0; --l) {
       Level& lv = levels[static_cast<size_t>(l)];
       const auto start = Clock::now();
-      detail::prolongCorrection(hierarchy.level(l), hierarchy.level(l + 1), lv.boxRows,
+      detail::prolongCorrection(hierarchy.level(l), hierarchy.level(l + 1), lv.sys.kind.data(),
+                                lv.boxRows,
                                 levels[static_cast<size_t>(l) + 1].x.data(), lv.x.data(),
                                 channels);  // P.2
       times.transfer += secondsSince(start);
