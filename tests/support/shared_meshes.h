@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,9 @@ struct SharedMesh {
   std::string texture;  ///< relative to sharedData()
   int vertices, faces, charts, seamEdges, boundaryEdges;
 };
+
+/// GoogleTest prints a SharedMesh parameter by its name (not as a byte dump).
+inline void PrintTo(const SharedMesh& mesh, std::ostream* os) { *os << mesh.name; }
 
 /// Every model of ../shared/data/INDEX.md.
 inline const std::vector<SharedMesh>& sharedMeshes() {
