@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "texgrad/core/heap_reuse.h"
 #include "texgrad/apps/geodesic.h"
 #include "texgrad/io/mesh_reader.h"
 
@@ -79,4 +80,11 @@ BENCHMARK(BM_GeodesicSetup)->Unit(benchmark::kMillisecond)->Iterations(2);
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  texgrad::reuseFreedMemory();  // as the CLI does
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "texgrad/core/heap_reuse.h"
 #include "texgrad/apps/lic.h"
 #include "texgrad/apps/vector_field.h"
 #include "texgrad/io/mesh_reader.h"
@@ -70,4 +71,11 @@ BENCHMARK(BM_LicBob1024)->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->Iterations(1
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  texgrad::reuseFreedMemory();  // as the CLI does
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -3,10 +3,12 @@
 #include <iostream>
 
 #include "commands.h"
+#include "texgrad/core/heap_reuse.h"
 
 int texgrad::cli::exitStatus = 0;
 
 int main(int argc, char** argv) {
+  texgrad::reuseFreedMemory();  // large texel buffers: reuse the heap, no fresh page faults
   CLI::App app{
       "texgrad: gradient-domain processing of surface signals inside a texture atlas.\n"
       "Meshes: .obj (+.mtl), .ply, .gltf, .glb, or builtin:NAME for a procedural mesh."};

@@ -1,0 +1,7 @@
+// Test support: every test program allocates as the CLI does (texgrad::reuseFreedMemory), which
+// also keeps the Release suite's run time down on virtual machines.
+#include "texgrad/core/heap_reuse.h"
+
+namespace {
+[[maybe_unused]] const bool kHeapReuse = texgrad::reuseFreedMemory();
+}  // namespace
