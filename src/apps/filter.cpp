@@ -30,8 +30,6 @@ InteractiveFilter::InteractiveFilter(const TexelDomain& domain, const Image& tex
   options.validate();
   x0_ = gatherTexels(domain.grid(), working_);
   x_ = x0_;
-  const TexelOperators& ops = domain.operators();
-  solver_.init(ops.screenedSystem(1.0));  // the pattern (with E_C's seam pairs, if any)
   setParameters(options.alpha, options.beta, options.betaPerCell);
 }
 
@@ -49,8 +47,14 @@ void InteractiveFilter::setParameters(double alpha, double beta, std::vector<dou
   rhs_ = alpha * (ops.mass() * x0_) + sBeta * x0_;
   // The system matrix depends on alpha only: painting beta changes just the right-hand side.
   if (alpha == alpha_) return;
+  const bool first = alpha_ == 0.0;
   alpha_ = alpha;
-  solver_.update(ops.screenedSystem(alpha));  // alpha M + S (+ alpha lambda C, paper §4.2)
+  // alpha M + S (+ alpha lambda C, paper §4.2); the pattern is the same for every alpha.
+  const Eigen::SparseMatrix<double> system = ops.screenedSystem(alpha);
+  if (first)
+    solver_.initAndUpdate(system);
+  else
+    solver_.update(system);
 }
 
 SolveReport InteractiveFilter::step() {

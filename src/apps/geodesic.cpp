@@ -459,10 +459,8 @@ GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions&
   gradients_ = std::make_unique<Gradients>(domain, options_.solver.multigrid.threads);
   a1_ = options_.alpha * ops.mass() + ops.stiffness();
   a2_ = ops.stiffness() + kDistanceScreening * ops.mass();
-  diffusionSolver_.init(a1_);
-  diffusionSolver_.update(a1_);
-  distanceSolver_.init(a2_);
-  distanceSolver_.update(a2_);
+  diffusionSolver_.initAndUpdate(a1_);
+  distanceSolver_.initAndUpdate(a2_);
   if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
     buildDirichlet();
   const TexturedMesh& mesh = domain.mesh();

@@ -217,14 +217,12 @@ LineIntegralConvolution::LineIntegralConvolution(TexelDomain& domain,
   ops.setMetric(g);
 
   const auto solverStart = std::chrono::steady_clock::now();
-  s.diffusion.init(system);
-  s.diffusion.update(system);
+  s.diffusion.initAndUpdate(system);
   if (s.sharpens()) {
     SparseMatrixd sharpenSystem = options.sharpenAlpha * s.mass + s.stiffness;
     pinNegligibleTexels(s.mass, options.sharpenAlpha, sharpenSystem);
     s.sharpening.emplace(domain.grid(), options.solver);
-    s.sharpening->init(sharpenSystem);
-    s.sharpening->update(sharpenSystem);
+    s.sharpening->initAndUpdate(sharpenSystem);
   }
   s.setup.solverSetupSeconds = secondsSince(solverStart);
   s.setup.setupSeconds = secondsSince(start);

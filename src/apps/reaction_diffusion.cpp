@@ -200,10 +200,8 @@ ReactionDiffusion::ReactionDiffusion(const TexelDomain& domain,
   SparseMatrixd systemV = ops.mass() + (dt * options.diffusionV) * ops.stiffness();
   pinNegligibleTexels(ops.mass(), systemU);
   pinNegligibleTexels(ops.mass(), systemV);
-  impl_->solverU.init(systemU);
-  impl_->solverU.update(systemU);
-  impl_->solverV.init(systemV);
-  impl_->solverV.update(systemV);
+  impl_->solverU.initAndUpdate(systemU);
+  impl_->solverV.initAndUpdate(systemV);
   impl_->seedState(options.seed);
 }
 

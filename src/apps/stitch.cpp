@@ -69,8 +69,7 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
     }
   }
   SystemSolver solver(grid, options.solver);
-  solver.init(a);
-  solver.update(a);
+  solver.initAndUpdate(a);
   Eigen::MatrixXd x = xbar;
   result.report = solver.solve(rhs, x);
   for (Eigen::Index u = 0; u < n; ++u)

@@ -26,7 +26,6 @@ double relativeResidual(const Eigen::SparseMatrix<double>& a, const Eigen::Matri
   return norm > 0 ? (b - a * x).norm() / norm : (a * x).norm();
 }
 
-
 /// Rows per task in the parallel vector kernels below (fixed: results do not depend on threads).
 constexpr Eigen::Index kRowsPerTask = 1 << 14;
 
@@ -109,16 +108,20 @@ SolverKind parseSolverKind(const std::string& text) {
 
 std::string toString(SolverKind kind) {
   switch (kind) {
-    case SolverKind::Multigrid: return "multigrid";
-    case SolverKind::MultigridCg: return "cg";
-    case SolverKind::Direct: return "direct";
+    case SolverKind::Multigrid:
+      return "multigrid";
+    case SolverKind::MultigridCg:
+      return "cg";
+    case SolverKind::Direct:
+      return "direct";
   }
   return "?";
 }
 
 void SolverSettings::validate() const {
   multigrid.validate();
-  if (cycles < 1) throw InvalidInputError("cycles must be at least 1, got " + std::to_string(cycles));
+  if (cycles < 1)
+    throw InvalidInputError("cycles must be at least 1, got " + std::to_string(cycles));
   if (!(tolerance >= 0.0)) throw InvalidInputError("solver tolerance must be >= 0");
 }
 
@@ -141,7 +144,7 @@ struct SystemSolver::Impl {
         arena(s.multigrid.threads > 0 ? s.multigrid.threads : tbb::task_arena::automatic) {
     settings.validate();
     if (settings.kind == SolverKind::Direct) return;
-    if (settings.singlePrecision && settings.kind == SolverKind::Multigrid)
+    if (settings.singlePrecision)  // float V-cycles; CG and refinement residuals stay double
       multigridFloat = std::make_unique<MultigridSolver<float>>(settings.multigrid);
     else
       multigridDouble = std::make_unique<MultigridSolver<double>>(settings.multigrid);
@@ -226,7 +229,8 @@ struct SystemSolver::Impl {
   SolveReport run(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, int count) {
     if (x.rows() != b.rows() || x.cols() != b.cols()) x = Eigen::MatrixXd::Zero(b.rows(), b.cols());
     switch (settings.kind) {
-      case SolverKind::Direct: return directSolve(b, x);
+      case SolverKind::Direct:
+        return directSolve(b, x);
       case SolverKind::Multigrid: {
         if (multigridFloat) return refinedCycles(b, x, count);
         SolveControl control;
@@ -238,7 +242,9 @@ struct SystemSolver::Impl {
         CgOptions options;
         options.maxIterations = count;
         options.tolerance = settings.tolerance > 0 ? settings.tolerance : 1e-8;
-        return conjugateGradient(a, b, x, multigridPreconditioner(*multigridDouble), options);
+        return visitMultigrid([&](auto& solver) {
+          return conjugateGradient(a, b, x, multigridPreconditioner(solver), options);
+        });
       }
     }
     return {};
@@ -278,9 +284,27 @@ void SystemSolver::update(const Eigen::SparseMatrix<double>& a) {
   impl_->updateTime = secondsSince(start);
 }
 
+void SystemSolver::initAndUpdate(const Eigen::SparseMatrix<double>& a) {
+  if (impl_->settings.kind == SolverKind::Direct) {
+    init(a);
+    update(a);
+    return;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  impl_->a = a;
+  impl_->a.makeCompressed();
+  impl_->cacheValid = false;
+  impl_->visitMultigrid([&](auto& solver) {
+    solver.initAndUpdate(impl_->grid, a);
+    return 0;
+  });
+  impl_->initTime = secondsSince(start);
+  impl_->updateTime = 0.0;
+}
+
 SolveReport SystemSolver::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
   const int count = impl_->settings.kind == SolverKind::MultigridCg ? 20 * impl_->settings.cycles
-                                                                     : impl_->settings.cycles;
+                                                                    : impl_->settings.cycles;
   return impl_->run(b, x, count);
 }
 
@@ -294,8 +318,14 @@ std::string SystemSolver::summary() const {
   return impl_->visitMultigrid([](auto& solver) { return solver.summary(); });
 }
 
-double SystemSolver::initSeconds() const { return impl_->initTime; }
-double SystemSolver::updateSeconds() const { return impl_->updateTime; }
-const SolverSettings& SystemSolver::settings() const { return impl_->settings; }
+double SystemSolver::initSeconds() const {
+  return impl_->initTime;
+}
+double SystemSolver::updateSeconds() const {
+  return impl_->updateTime;
+}
+const SolverSettings& SystemSolver::settings() const {
+  return impl_->settings;
+}
 
 }  // namespace texgrad

@@ -115,13 +115,6 @@ void assignInteriorNextToBoundary(const GridLevel& level, const Eigen::SparseMat
 
 }  // namespace
 
-Eigen::SparseMatrix<double> onesLike(const Eigen::SparseMatrix<double>& a) {
-  Eigen::SparseMatrix<double> ones = a;
-  ones.makeCompressed();
-  std::fill(ones.valuePtr(), ones.valuePtr() + ones.nonZeros(), 1.0);
-  return ones;
-}
-
 void classifyLevel(const GridLevel& level, const Eigen::SparseMatrix<double>& pattern,
                    LevelSystem& system) {
   const int n = level.unknownCount();

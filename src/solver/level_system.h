@@ -91,7 +91,4 @@ template <typename T>
 void assignStencils(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
                     const LevelSystem& system, std::vector<T>& stencils);
 
-/// Same sparsity with all values 1 (so Galerkin products of patterns cannot cancel).
-Eigen::SparseMatrix<double> onesLike(const Eigen::SparseMatrix<double>& a);
-
 }  // namespace texgrad::detail

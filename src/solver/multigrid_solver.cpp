@@ -45,7 +45,6 @@ void shiftDiagonal(Eigen::SparseMatrix<double>& a) {
       if (it.row() == k) it.valueRef() += shift;
 }
 
-
 using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point start) {
@@ -74,8 +73,8 @@ void MultigridOptions::validate() const {
     throw InvalidInputError("multigrid sweeps is " + std::to_string(sweeps) +
                             "; expected 1 to 100 (paper default 3)");
   if (minCoarseUnknowns < 1)
-    throw InvalidInputError("multigrid minCoarseUnknowns is " +
-                            std::to_string(minCoarseUnknowns) + "; expected >= 1");
+    throw InvalidInputError("multigrid minCoarseUnknowns is " + std::to_string(minCoarseUnknowns) +
+                            "; expected >= 1");
   if (threads < 0)
     throw InvalidInputError("multigrid threads is " + std::to_string(threads) +
                             "; expected >= 0 (0 = all cores)");
@@ -84,8 +83,7 @@ void MultigridOptions::validate() const {
 void SolveControl::validate() const {
   if (maxCycles < 0)
     throw InvalidInputError("maxCycles is " + std::to_string(maxCycles) + "; expected >= 0");
-  if (!(tolerance >= 0.0))
-    throw InvalidInputError("tolerance must be >= 0 (0 runs all cycles)");
+  if (!(tolerance >= 0.0)) throw InvalidInputError("tolerance must be >= 0 (0 runs all cycles)");
 }
 
 template <typename Scalar>
@@ -130,50 +128,77 @@ struct MultigridSolver<Scalar>::Impl {
     }
   }
 
-  void symbolic(const Eigen::SparseMatrix<double>& pattern) {
-    const auto start = Clock::now();
-    levels.clear();
-    levels.resize(static_cast<size_t>(hierarchy.levelCount()));
-    nonZeros.assign(levels.size(), 0);
-    coarseSolver = CholmodSolver();
-    Eigen::SparseMatrix<double> a = detail::onesLike(pattern);
-    for (int l = 0; l <= coarsest(); ++l) {
-      Level& lv = levels[static_cast<size_t>(l)];
-      lv.boxRows = detail::boxRowsOf(hierarchy.level(l));
-      nonZeros[static_cast<size_t>(l)] = a.nonZeros();
-      if (l < coarsest() || l == 0) detail::classifyLevel(hierarchy.level(l), a, lv.sys);
-      if (l == coarsest()) coarseSolver.analyzePattern(a);
-      else a = galerkin(a, hierarchy.prolongation(l));
+  /// Walks the levels once: A^0 = a0, then A^{l+1} = Pᵀ A^l P (diagonal-shifted for l > 0).
+  /// `symbolicPhase` builds the split and the CHOLMOD analyses from the patterns (conservative
+  /// sparse products never drop an entry, so the values do not change any pattern);
+  /// `numericPhase` fills stencils and boundary data and factorises. Both at once cost one
+  /// chain of Galerkin products instead of two.
+  void walkLevels(const Eigen::SparseMatrix<double>& a0, bool symbolicPhase, bool numericPhase) {
+    if (symbolicPhase) {
+      levels.clear();
+      levels.resize(static_cast<size_t>(hierarchy.levelCount()));
+      nonZeros.assign(levels.size(), 0);
+      coarseSolver = CholmodSolver();
     }
+    Eigen::SparseMatrix<double> coarse;
+    const Eigen::SparseMatrix<double>* a = &a0;
+    for (int l = 0; l <= coarsest(); ++l) {
+      const size_t sl = static_cast<size_t>(l);
+      const GridLevel& grid = hierarchy.level(l);
+      Level& lv = levels[sl];
+      if (symbolicPhase) {
+        lv.boxRows = detail::boxRowsOf(grid);
+        nonZeros[sl] = a->nonZeros();
+      } else if (a->nonZeros() != nonZeros[sl] || a->rows() != grid.unknownCount()) {
+        throw InvalidInputError(
+            "MultigridSolver::update: level " + std::to_string(l) + " matrix has " +
+            std::to_string(a->nonZeros()) + " non-zeros, the pattern given to init has " +
+            std::to_string(nonZeros[sl]) + "; call init again when the sparsity changes");
+      }
+      if (l > 0 && numericPhase) shiftDiagonal(coarse);
+      if (l < coarsest() || l == 0) {
+        if (symbolicPhase) detail::classifyLevel(grid, *a, lv.sys);
+        if (numericPhase) {
+          detail::assignBoundary(grid, *a, lv.sys);
+          detail::assignStencils<T>(grid, *a, lv.sys, lv.stencil);
+        }
+      }
+      if (l == coarsest()) {
+        if (symbolicPhase) coarseSolver.analyzePattern(*a);
+        if (numericPhase) coarseSolver.factorize(*a);
+      } else {
+        coarse = galerkin(*a, hierarchy.prolongation(l));
+        a = &coarse;
+      }
+    }
+  }
+
+  void buildHierarchy(const TexelGrid& grid) {
+    const auto start = Clock::now();
+    hierarchy = GridHierarchy::build(grid, options.levels, options.minCoarseUnknowns);
+    stats.initSeconds += secondsSince(start);
+  }
+
+  void symbolic(const Eigen::SparseMatrix<double>& pattern, bool numericToo) {
+    const auto start = Clock::now();
+    walkLevels(pattern, true, numericToo);
     initialised = true;
-    updated = false;
+    updated = numericToo;
     channels = 0;
     ++stats.inits;
-    stats.initSeconds += secondsSince(start);
+    const double seconds = secondsSince(start);
+    if (numericToo) {
+      times = {};
+      ++stats.updates;
+    }
+    stats.initSeconds += seconds;
     refreshCounters();
   }
 
   void numeric(const Eigen::SparseMatrix<double>& a0) {
     if (!initialised) throw InvalidInputError("MultigridSolver::update called before init");
     const auto start = Clock::now();
-    Eigen::SparseMatrix<double> a = a0;
-    for (int l = 0; l <= coarsest(); ++l) {
-      if (a.nonZeros() != nonZeros[static_cast<size_t>(l)] ||
-          a.rows() != hierarchy.level(l).unknownCount())
-        throw InvalidInputError("MultigridSolver::update: level " + std::to_string(l) +
-                                " matrix has " + std::to_string(a.nonZeros()) +
-                                " non-zeros, the pattern given to init has " +
-                                std::to_string(nonZeros[static_cast<size_t>(l)]) +
-                                "; call init again when the sparsity changes");
-      if (l > 0) shiftDiagonal(a);
-      Level& lv = levels[static_cast<size_t>(l)];
-      if (l < coarsest() || l == 0) {
-        detail::assignBoundary(hierarchy.level(l), a, lv.sys);
-        detail::assignStencils<T>(hierarchy.level(l), a, lv.sys, lv.stencil);
-      }
-      if (l == coarsest()) coarseSolver.factorize(a);
-      else a = galerkin(a, hierarchy.prolongation(l));
-    }
+    walkLevels(a0, false, true);
     updated = true;
     times = {};
     ++stats.updates;
@@ -239,11 +264,13 @@ struct MultigridSolver<Scalar>::Impl {
     coarseWork.resize(g.unknownCount(), k);
     for (int u = 0; u < g.unknownCount(); ++u)
       for (int c = 0; c < k; ++c)
-        coarseWork(u, c) = double(lv.b[static_cast<size_t>(g.slotOfUnknown[static_cast<size_t>(u)] * k + c)]);
+        coarseWork(u, c) =
+            double(lv.b[static_cast<size_t>(g.slotOfUnknown[static_cast<size_t>(u)] * k + c)]);
     coarseSolver.solveInPlace(coarseWork);
     for (int u = 0; u < g.unknownCount(); ++u)
       for (int c = 0; c < k; ++c)
-        lv.x[static_cast<size_t>(g.slotOfUnknown[static_cast<size_t>(u)] * k + c)] = static_cast<T>(coarseWork(u, c));
+        lv.x[static_cast<size_t>(g.slotOfUnknown[static_cast<size_t>(u)] * k + c)] =
+            static_cast<T>(coarseWork(u, c));
     times.coarse += secondsSince(start);
   }
 
@@ -267,8 +294,8 @@ struct MultigridSolver<Scalar>::Impl {
       Level& lv = levels[static_cast<size_t>(l)];
       const auto start = Clock::now();
       detail::prolongCorrection(hierarchy.level(l), hierarchy.level(l + 1), lv.sys.kind.data(),
-                                lv.boxRows,
-                                levels[static_cast<size_t>(l) + 1].x.data(), lv.x.data(),
+                                lv.boxRows, levels[static_cast<size_t>(l) + 1].x.data(),
+                                lv.x.data(),
                                 channels);  // P.2
       times.transfer += secondsSince(start);
       boundary(lv);      // P.3–P.4
@@ -331,13 +358,20 @@ template <typename Scalar>
 MultigridSolver<Scalar>& MultigridSolver<Scalar>::operator=(MultigridSolver&&) noexcept = default;
 
 template <typename Scalar>
-void MultigridSolver<Scalar>::init(const TexelGrid& grid, const Eigen::SparseMatrix<double>& pattern) {
+void MultigridSolver<Scalar>::init(const TexelGrid& grid,
+                                   const Eigen::SparseMatrix<double>& pattern) {
   impl_->arena.execute([&] {
-    const auto start = Clock::now();
-    impl_->hierarchy = GridHierarchy::build(grid, impl_->options.levels,
-                                            impl_->options.minCoarseUnknowns);
-    impl_->stats.initSeconds += secondsSince(start);
-    impl_->symbolic(pattern);
+    impl_->buildHierarchy(grid);
+    impl_->symbolic(pattern, false);
+  });
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::initAndUpdate(const TexelGrid& grid,
+                                            const Eigen::SparseMatrix<double>& a) {
+  impl_->arena.execute([&] {
+    impl_->buildHierarchy(grid);
+    impl_->symbolic(a, true);
   });
 }
 
@@ -365,14 +399,15 @@ void MultigridSolver<Scalar>::cycle(const Matrix& b, Matrix& x) {
 }
 
 template <typename Scalar>
-SolveReport MultigridSolver<Scalar>::solve(const Matrix& b, Matrix& x, const SolveControl& control) {
+SolveReport MultigridSolver<Scalar>::solve(const Matrix& b, Matrix& x,
+                                           const SolveControl& control) {
   control.validate();
   const int n = impl_->hierarchy.levelCount() > 0 ? impl_->hierarchy.level(0).unknownCount() : 0;
   if (b.rows() != n || x.rows() != n || x.cols() != b.cols())
     throw InvalidInputError("MultigridSolver::solve: b is " + std::to_string(b.rows()) + " x " +
                             std::to_string(b.cols()) + " and x is " + std::to_string(x.rows()) +
-                            " x " + std::to_string(x.cols()) + "; expected " +
-                            std::to_string(n) + " rows each and equal channel counts");
+                            " x " + std::to_string(x.cols()) + "; expected " + std::to_string(n) +
+                            " rows each and equal channel counts");
   SolveReport report;
   impl_->arena.execute([&] {
     impl_->ensureChannels(static_cast<int>(b.cols()));
@@ -409,10 +444,11 @@ void MultigridSolver<Scalar>::precondition(const Eigen::MatrixXd& r, Eigen::Matr
 }
 
 template <typename Scalar>
-MultigridSolver<Scalar>& MultigridSolver<Scalar>::analyzePattern(const Eigen::SparseMatrix<double>& a) {
+MultigridSolver<Scalar>& MultigridSolver<Scalar>::analyzePattern(
+    const Eigen::SparseMatrix<double>& a) {
   if (impl_->hierarchy.levelCount() == 0)
     throw InvalidInputError("MultigridSolver::analyzePattern: call init(grid, pattern) first");
-  impl_->arena.execute([&] { impl_->symbolic(a); });
+  impl_->arena.execute([&] { impl_->symbolic(a, false); });
   return *this;
 }
 
@@ -441,20 +477,28 @@ Eigen::ComputationInfo MultigridSolver<Scalar>::info() const {
 }
 
 template <typename Scalar>
-const GridHierarchy& MultigridSolver<Scalar>::hierarchy() const { return impl_->hierarchy; }
+const GridHierarchy& MultigridSolver<Scalar>::hierarchy() const {
+  return impl_->hierarchy;
+}
 template <typename Scalar>
-const MultigridStats& MultigridSolver<Scalar>::stats() const { return impl_->stats; }
+const MultigridStats& MultigridSolver<Scalar>::stats() const {
+  return impl_->stats;
+}
 template <typename Scalar>
-const PhaseTimes& MultigridSolver<Scalar>::cycleTimes() const { return impl_->times; }
+const PhaseTimes& MultigridSolver<Scalar>::cycleTimes() const {
+  return impl_->times;
+}
 template <typename Scalar>
-const MultigridOptions& MultigridSolver<Scalar>::options() const { return impl_->options; }
+const MultigridOptions& MultigridSolver<Scalar>::options() const {
+  return impl_->options;
+}
 
 template <typename Scalar>
 std::string MultigridSolver<Scalar>::summary() const {
   const Impl& m = *impl_;
   std::ostringstream os;
-  os << "multigrid (" << (sizeof(Scalar) == 4 ? "float" : "double") << "): "
-     << m.hierarchy.levelCount() << " levels, " << m.options.sweeps << " sweeps, "
+  os << "multigrid (" << (sizeof(Scalar) == 4 ? "float" : "double")
+     << "): " << m.hierarchy.levelCount() << " levels, " << m.options.sweeps << " sweeps, "
      << m.hierarchy.chartCount() << " charts\n";
   os << "level  unknowns  interior  boundary   nnz(A)  nnz(A_bb)   slots\n";
   for (int l = 0; l < m.hierarchy.levelCount(); ++l) {
@@ -462,8 +506,10 @@ std::string MultigridSolver<Scalar>::summary() const {
     const auto& sys = m.levels[static_cast<size_t>(l)].sys;
     const bool direct = l == m.coarsest();
     os << std::setw(5) << l << std::setw(10) << g.unknownCount();
-    if (direct && l > 0) os << std::setw(10) << "-" << std::setw(10) << "direct";
-    else os << std::setw(10) << sys.interiorCount() << std::setw(10) << sys.boundaryCount();
+    if (direct && l > 0)
+      os << std::setw(10) << "-" << std::setw(10) << "direct";
+    else
+      os << std::setw(10) << sys.interiorCount() << std::setw(10) << sys.boundaryCount();
     os << std::setw(9) << m.nonZeros[static_cast<size_t>(l)] << std::setw(11)
        << (direct && l > 0 ? m.nonZeros[static_cast<size_t>(l)] : sys.boundaryNonZeros)
        << std::setw(8) << g.slotCount << "\n";

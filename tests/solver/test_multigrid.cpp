@@ -39,7 +39,7 @@ TEST(Multigrid, ConvergenceFactorIndependentOfGridSize) {
       (alpha < 1.0 ? poisson : screened).push_back(r.convergenceFactor(4));
       std::printf("alpha %g n %d factor per cycle %.4f\n", alpha, n, r.convergenceFactor(4));
       EXPECT_LT(r.convergenceFactor(4), 0.2) << "n = " << n << ", alpha = " << alpha << "\n"
-                                            << r.toString();
+                                             << r.toString();
     }
     EXPECT_LE(screened.back(), 1.2 * poisson.back()) << "n = " << n;
   }
@@ -59,7 +59,8 @@ TEST(Multigrid, DoubleConvergesToCholmodSolution) {
     Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
     const SolveReport r = mg.solve(b, x, {40, 1e-12});
     EXPECT_TRUE(r.converged) << r.toString();
-    EXPECT_LT((x - exact).norm() / exact.norm(), 1e-10) << "alpha " << alpha << "\n" << r.toString();
+    EXPECT_LT((x - exact).norm() / exact.norm(), 1e-10) << "alpha " << alpha << "\n"
+                                                        << r.toString();
     for (size_t i = 2; i < r.residuals.size(); ++i)  // geometric decrease, cycle after cycle
       EXPECT_LT(r.residuals[i], 0.5 * r.residuals[i - 1]) << "cycle " << i << "\n" << r.toString();
   }
@@ -76,6 +77,30 @@ TEST(Multigrid, FloatReachesSinglePrecisionAccuracy) {
   Eigen::MatrixXf x = Eigen::MatrixXf::Zero(a.rows(), 3);
   const SolveReport r = mg.solve(b.cast<float>(), x, {12, 0.0});
   EXPECT_LT((x.cast<double>() - exact).norm() / exact.norm(), 1e-5) << r.toString();
+}
+
+TEST(Multigrid, InitAndUpdateEqualsInitThenUpdate) {
+  // One chain of Galerkin products for both phases gives bit-identical cycles, and an update
+  // with a new alpha afterwards still needs no new symbolic analysis.
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  const Eigen::SparseMatrix<double> a = p.system(1e3);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 2, 5);
+  MultigridSolver<double> separate, fused;
+  separate.init(p.grid, p.system(1.0));
+  separate.update(a);
+  fused.initAndUpdate(p.grid, a);
+  EXPECT_EQ(fused.stats().inits, 1);
+  EXPECT_EQ(fused.stats().updates, 1);
+  EXPECT_EQ(fused.stats().symbolicAnalyses, separate.stats().symbolicAnalyses);
+  Eigen::MatrixXd x1 = Eigen::MatrixXd::Zero(a.rows(), 2), x2 = x1;
+  for (int k = 0; k < 3; ++k) {
+    separate.cycle(b, x1);
+    fused.cycle(b, x2);
+  }
+  EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0);
+  const int analyses = fused.stats().symbolicAnalyses;
+  fused.update(p.system(1e4));
+  EXPECT_EQ(fused.stats().symbolicAnalyses, analyses);
 }
 
 TEST(Multigrid, ChangingAlphaOnlyUpdates) {
@@ -104,8 +129,10 @@ TEST(Multigrid, ResultIndependentOfThreadCount) {
     for (int threads : {1, 2}) {
       MultigridOptions o;
       o.threads = threads;
-      const SolveReport r = useFloat ? runCycles<float>(p, 1e3, 3, 3, o) : runCycles<double>(p, 1e3, 3, 3, o);
-      results[threads - 1] = Eigen::Map<const Eigen::VectorXd>(r.residuals.data(), Eigen::Index(r.residuals.size()));
+      const SolveReport r =
+          useFloat ? runCycles<float>(p, 1e3, 3, 3, o) : runCycles<double>(p, 1e3, 3, 3, o);
+      results[threads - 1] =
+          Eigen::Map<const Eigen::VectorXd>(r.residuals.data(), Eigen::Index(r.residuals.size()));
     }
     EXPECT_EQ(results[0], results[1]);  // bitwise: residual norms use a fixed reduction tree
   }
@@ -168,7 +195,7 @@ TEST(Multigrid, RejectsMisuse) {
   mg.init(p.grid, p.system(1.0));
   Eigen::MatrixXd x = Eigen::MatrixXd::Zero(p.mass.rows(), 1);
   EXPECT_THROW(mg.solve(x, x, {1, 0.0}), InvalidInputError);  // before update
-  EXPECT_THROW(mg.update(q.system(1.0)), InvalidInputError);   // other pattern
+  EXPECT_THROW(mg.update(q.system(1.0)), InvalidInputError);  // other pattern
   EXPECT_THROW(mg.init(p.grid, q.system(1.0)), InvalidInputError);
 }
 

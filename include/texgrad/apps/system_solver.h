@@ -30,10 +30,11 @@ struct SolverSettings {
   SolverKind kind = SolverKind::Multigrid;
   MultigridOptions multigrid;  ///< levels, sweeps, threads
   /// Float V-cycles (factorisations stay double); the residual is formed in double each cycle
-  /// (mixed-precision refinement), so float cycles reach double-precision accuracy.
+  /// (mixed-precision refinement, or the double-precision CG around a float V-cycle), so float
+  /// cycles reach double-precision accuracy.
   bool singlePrecision = true;
-  int cycles = 6;              ///< V-cycles (Multigrid) or max CG iterations / 20 (MultigridCg)
-  double tolerance = 0.0;      ///< stop early below this relative residual (0: run all cycles)
+  int cycles = 6;          ///< V-cycles (Multigrid) or max CG iterations / 20 (MultigridCg)
+  double tolerance = 0.0;  ///< stop early below this relative residual (0: run all cycles)
   /// Throws InvalidInputError naming the first bad field.
   void validate() const;
 };
@@ -51,6 +52,8 @@ class SystemSolver {
   void init(const Eigen::SparseMatrix<double>& pattern);
   /// Numeric phase for a new A with the same pattern (new alpha, beta or metric).
   void update(const Eigen::SparseMatrix<double>& a);
+  /// init(a) then update(a); multigrid forms its Galerkin products once instead of twice.
+  void initAndUpdate(const Eigen::SparseMatrix<double>& a);
   /// Solves A X = B (n x k), using X as the initial guess for the iterative kinds.
   SolveReport solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
   /// One V-cycle (Multigrid and MultigridCg kinds) or an exact solve (Direct), for interactive

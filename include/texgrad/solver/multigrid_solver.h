@@ -30,20 +30,20 @@ struct MultigridOptions {
 
 /// When solve() stops: after maxCycles, or once the relative residual falls below tolerance.
 struct SolveControl {
-  int maxCycles = 10;        ///< upper bound on V-cycles (or CG iterations)
-  double tolerance = 0.0;    ///< relative residual ||b - A x|| / ||b|| to reach; 0 = run all cycles
+  int maxCycles = 10;      ///< upper bound on V-cycles (or CG iterations)
+  double tolerance = 0.0;  ///< relative residual ||b - A x|| / ||b|| to reach; 0 = run all cycles
   /// Throws InvalidInputError naming the first bad field.
   void validate() const;
 };
 
 /// Counters and timings of the set-up phases (paper §6.3, Table 1: initialization / update).
 struct MultigridStats {
-  int inits = 0;                 ///< hierarchy builds and symbolic analyses (init calls)
-  int updates = 0;               ///< numeric updates (Galerkin products and factorisations)
-  int symbolicAnalyses = 0;      ///< CHOLMOD analyses over all boundary and coarse systems
-  int numericFactorizations = 0; ///< CHOLMOD factorisations over all boundary and coarse systems
-  double initSeconds = 0.0;      ///< total time in init
-  double updateSeconds = 0.0;    ///< total time in update
+  int inits = 0;                  ///< hierarchy builds and symbolic analyses (init calls)
+  int updates = 0;                ///< numeric updates (Galerkin products and factorisations)
+  int symbolicAnalyses = 0;       ///< CHOLMOD analyses over all boundary and coarse systems
+  int numericFactorizations = 0;  ///< CHOLMOD factorisations over all boundary and coarse systems
+  double initSeconds = 0.0;       ///< total time in init
+  double updateSeconds = 0.0;     ///< total time in update
 };
 
 /// Multigrid solver for A x = b over the unknowns of a TexelGrid, A = alpha M + S (n x n SPD,
@@ -71,6 +71,9 @@ class MultigridSolver {
   /// factorisations. `a` must have the pattern given to init. Throws NumericalError if a block is
   /// not positive definite.
   void update(const Eigen::SparseMatrix<double>& a);
+  /// init(grid, a) then update(a) with one chain of Galerkin products instead of two (for
+  /// one-shot solves; the result is identical).
+  void initAndUpdate(const TexelGrid& grid, const Eigen::SparseMatrix<double>& a);
   /// One V-cycle (Fig. 8) improving x in place for right-hand side b (both n x k).
   void cycle(const Matrix& b, Matrix& x);
   /// V-cycles from the initial guess x until control is met; residual and change per cycle.
