@@ -3,12 +3,12 @@
 
 #include <unistd.h>
 
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <new>
-#include <cctype>
 #include <optional>
 
 #include "texgrad/core/error.h"
@@ -24,11 +24,15 @@ constexpr std::string_view kBuiltinPrefix = "builtin:";
 constexpr int kSampleTextureSize = 1024;
 constexpr int kProgressBarWidth = 40;
 
-bool isBuiltin(const std::string& spec) { return spec.rfind(kBuiltinPrefix, 0) == 0; }
+bool isBuiltin(const std::string& spec) {
+  return spec.rfind(kBuiltinPrefix, 0) == 0;
+}
 
 }  // namespace
 
-std::string builtinMeshNames() { return "sample, sphere, cube, cylinder, square, two-charts"; }
+std::string builtinMeshNames() {
+  return "sample, sphere, cube, cylinder, square, two-charts";
+}
 
 TexturedMesh loadMesh(const std::string& spec, double weldTolerance) {
   if (!isBuiltin(spec)) {
@@ -44,8 +48,8 @@ TexturedMesh loadMesh(const std::string& spec, double weldTolerance) {
   if (name == "cylinder") return procedural::cylinder();
   if (name == "square") return procedural::square();
   if (name == "two-charts") return procedural::twoChartSquare();
-  throw InvalidInputError("unknown built-in mesh '" + spec + "'; use builtin:NAME with NAME one of " +
-                          builtinMeshNames());
+  throw InvalidInputError("unknown built-in mesh '" + spec +
+                          "'; use builtin:NAME with NAME one of " + builtinMeshNames());
 }
 
 Image loadTexture(const TexturedMesh& mesh, const std::string& meshSpec,
@@ -65,7 +69,8 @@ namespace {
 /// Parses 1-6 decimal digits starting at `pos`, advancing it; nullopt if there are none or more.
 std::optional<int> parseDigits(const std::string& text, size_t& pos) {
   const size_t start = pos;
-  while (pos < text.size() && pos - start < 7 && std::isdigit(static_cast<unsigned char>(text[pos])))
+  while (pos < text.size() && pos - start < 7 &&
+         std::isdigit(static_cast<unsigned char>(text[pos])))
     ++pos;
   if (pos == start || pos - start > 6) return std::nullopt;
   return std::stoi(text.substr(start, pos - start));
@@ -77,7 +82,8 @@ std::pair<int, int> parseResolution(const std::string& text) {
   size_t pos = 0;
   const std::optional<int> w = parseDigits(text, pos);
   std::optional<int> h = w;
-  if (w && pos < text.size() && (text[pos] == 'x' || text[pos] == 'X')) h = parseDigits(text, ++pos);
+  if (w && pos < text.size() && (text[pos] == 'x' || text[pos] == 'X'))
+    h = parseDigits(text, ++pos);
   if (!w || !h || pos != text.size())
     throw InvalidInputError("resolution '" + text + "' is not WxH or N (e.g. 1024x1024 or 1024)");
   if (*w < 2 || *h < 2)
@@ -156,7 +162,9 @@ int runGuarded(const std::function<void()>& body) {
   return 1;
 }
 
-void printJson(const nlohmann::json& document) { std::cout << document.dump(2) << "\n"; }
+void printJson(const nlohmann::json& document) {
+  std::cout << document.dump(2) << "\n";
+}
 
 void addWeldToleranceOption(CLI::App* cmd, double& tolerance) {
   cmd->add_option("--weld-tolerance", tolerance,
@@ -173,6 +181,7 @@ SolverSettings SolverArgs::settings() const {
     throw InvalidInputError("--precision must be float or double, got '" + precision + "'");
   s.singlePrecision = precision == "float";
   s.cycles = cycles;
+  s.tolerance = tolerance;
   s.multigrid.levels = levels;
   s.multigrid.sweeps = sweeps;
   s.multigrid.threads = threads;
@@ -180,17 +189,23 @@ SolverSettings SolverArgs::settings() const {
   return s;
 }
 
-void addSolverOptions(CLI::App* cmd, SolverArgs& args, int defaultCycles) {
-  args.cycles = defaultCycles;
+void addSolverOptions(CLI::App* cmd, SolverArgs& args, const SolverSettings& defaults) {
   cmd->add_option("--solver", args.kind,
                   "multigrid (V-cycles, paper Sec. 6), cg (conjugate gradients preconditioned by "
-                  "a V-cycle) or direct (CHOLMOD: exact, slower, more memory)")
-      ->default_val("multigrid")
+                  "one V-cycle per iteration: converges where plain V-cycles are slow) or direct "
+                  "(CHOLMOD: exact, slower, more memory)")
+      ->default_val(toString(defaults.kind))
       ->check(CLI::IsMember({"multigrid", "cg", "direct"}));
   cmd->add_option("--cycles", args.cycles,
-                  "V-cycles for multigrid (more = closer to the exact solution)")
-      ->default_val(defaultCycles)
+                  "V-cycles for multigrid, or 1/20 of the most CG iterations (more = closer to "
+                  "the exact solution)")
+      ->default_val(defaults.cycles)
       ->check(CLI::Range(1, 10000));
+  cmd->add_option("--tolerance", args.tolerance,
+                  "Stop once the relative residual |b - A x| / |b| is below this (0: run every "
+                  "cycle)")
+      ->default_val(defaults.tolerance)
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--levels", args.levels, "Multigrid coarsening levels (paper default 4)")
       ->default_val(4)
       ->check(CLI::Range(0, 16));
@@ -215,8 +230,7 @@ void addReportOptions(CLI::App* cmd, ReportArgs& args) {
 
 namespace {
 double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 }  // namespace
 
@@ -267,7 +281,8 @@ void writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const 
   std::string source = mesh.sourcePath.extension().string();
   for (char& c : source) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (source != ".gltf" && source != ".glb")
-    throw InvalidInputError("--out " + out + " asks for a glTF asset, but the mesh was not read "
+    throw InvalidInputError("--out " + out +
+                            " asks for a glTF asset, but the mesh was not read "
                             "from glTF; write an image (.png, .exr, ...) instead");
   writeGltfWithTexture(mesh.sourcePath, out, slot, image, format);
 }

@@ -10,9 +10,9 @@
 
 #include "texgrad/apps/system_solver.h"
 #include "texgrad/core/progress.h"
-#include "texgrad/solver/solve_report.h"
 #include "texgrad/io/image.h"
 #include "texgrad/io/textured_mesh.h"
+#include "texgrad/solver/solve_report.h"
 
 namespace texgrad::cli {
 
@@ -55,14 +55,15 @@ struct SolverArgs {
   std::string kind = "multigrid";
   std::string precision = "float";
   int cycles = 6;
+  double tolerance = 0.0;
   int levels = 4;
   int sweeps = 3;
   int threads = 0;
   /// The settings these flags describe; throws InvalidInputError on a bad value.
   SolverSettings settings() const;
 };
-/// Registers the solver flags on `cmd`; `defaultCycles` is the command's V-cycle default.
-void addSolverOptions(CLI::App* cmd, SolverArgs& args, int defaultCycles);
+/// Registers the solver flags on `cmd` with the command's defaults (kind, cycles, tolerance).
+void addSolverOptions(CLI::App* cmd, SolverArgs& args, const SolverSettings& defaults);
 
 /// Output flags shared by processing commands.
 struct ReportArgs {

@@ -113,7 +113,7 @@ void addFilterCommand(CLI::App& app) {
   cmd->add_option("--bit-depth", args->bitDepth,
                   "8, 16, half or float (default: the input texture's)");
   addWeldToleranceOption(cmd, args->weldTolerance);
-  addSolverOptions(cmd, args->solver, FilterOptions().solver.cycles);
+  addSolverOptions(cmd, args->solver, FilterOptions().solver);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runFilter(*args); }); });
 }

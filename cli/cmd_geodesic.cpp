@@ -249,7 +249,7 @@ void addGeodesicCommand(CLI::App& app) {
       ->default_val("average")
       ->check(CLI::IsMember({"average", "neumann"}));
   addWeldToleranceOption(cmd, args->weldTolerance);
-  addSolverOptions(cmd, args->solver, 6);
+  addSolverOptions(cmd, args->solver, GeodesicOptions().solver);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runGeodesic(*args); }); });
 }

@@ -37,7 +37,6 @@ FaceVectorField loadField(const LicArgs& args, const TexturedMesh& mesh) {
 void runLic(LicArgs args) {
   StageTimer timer;
   args.options.solver = args.solver.settings();
-  args.options.solver.tolerance = defaultLicSolver().tolerance;
   args.options.channels = args.colour ? 3 : 1;
   args.options.validate();
   const auto [width, height] = parseResolution(args.resolution);
@@ -143,10 +142,8 @@ void addLicCommand(CLI::App& app) {
                 "Colour noise (random hues) instead of grey noise");
   cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: 8)");
   addWeldToleranceOption(cmd, args->weldTolerance);
-  addSolverOptions(cmd, args->solver, defaultLicSolver().cycles);
   // Plain V-cycles stall on the anisotropic metric (paper Sec. 8): default to multigrid-CG.
-  args->solver.kind = toString(defaultLicSolver().kind);
-  cmd->get_option("--solver")->default_str(args->solver.kind);
+  addSolverOptions(cmd, args->solver, defaultLicSolver());
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runLic(*args); }); });
 }

@@ -35,8 +35,9 @@ void runMask(const MaskArgs& args) {
 void addMaskCommand(CLI::App& app) {
   auto args = std::make_shared<MaskArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "mask", "Write an image showing which texels are active, interior or boundary, which chart "
-              "owns each texel, or where footprints meet several charts.");
+      "mask",
+      "Write an image showing which texels are active, interior or boundary, which chart "
+      "owns each texel, or where footprints meet several charts.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   cmd->add_option("--resolution,-r", args->resolution, "Texture size WxH (or N)")

@@ -121,7 +121,7 @@ void addReactCommand(CLI::App& app) {
       ->check(resolutionValidator());
   cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: 8)");
   addWeldToleranceOption(cmd, args->weldTolerance);
-  addSolverOptions(cmd, args->solver, defaultReactionSolver().cycles);
+  addSolverOptions(cmd, args->solver, defaultReactionSolver());
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runReact(*args); }); });
 }

@@ -28,9 +28,9 @@ void runSample(const SampleArgs& args) {
   const Image texture = procedural::sampleTexture(args.size, args.size);
   writeImage(dir / (args.mesh + ".png"), texture, PixelFormat::UInt8);
   writeObj(dir / (args.mesh + ".obj"), mesh, args.mesh + ".png");
-  std::cout << "wrote " << (dir / (args.mesh + ".obj")).string() << " ("
-            << mesh.triangles.size() << " faces) and " << (dir / (args.mesh + ".png")).string()
-            << " (" << args.size << "x" << args.size << ")\n";
+  std::cout << "wrote " << (dir / (args.mesh + ".obj")).string() << " (" << mesh.triangles.size()
+            << " faces) and " << (dir / (args.mesh + ".png")).string() << " (" << args.size << "x"
+            << args.size << ")\n";
 }
 
 }  // namespace

@@ -130,7 +130,9 @@ void addStitchCommand(CLI::App& app) {
                 "channel, estimated where sources meet, is divided out before stitching)");
   cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: the input's)");
   addWeldToleranceOption(cmd, args->weldTolerance);
-  addSolverOptions(cmd, args->solver, 10);
+  SolverSettings solverDefaults;
+  solverDefaults.cycles = 10;
+  addSolverOptions(cmd, args->solver, solverDefaults);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runStitch(*args); }); });
 }

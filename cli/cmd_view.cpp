@@ -44,8 +44,8 @@ void runView(ViewArgs& args) {
     if (s.width != texture.width || s.height != texture.height)
       throw InvalidInputError("--segments is " + std::to_string(s.width) + "x" +
                               std::to_string(s.height) + " but --composite is " +
-                              std::to_string(texture.width) + "x" +
-                              std::to_string(texture.height) + "; they must match");
+                              std::to_string(texture.width) + "x" + std::to_string(texture.height) +
+                              "; they must match");
   }
   int width = texture.width, height = texture.height;
   if (!args.resolution.empty()) std::tie(width, height) = parseResolution(args.resolution);
@@ -77,7 +77,8 @@ void addViewCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "view",
       "Serve an interactive viewer in the browser: paint filter strokes, click geodesic sources "
-      "or run reaction-diffusion or LIC, and watch the solver refine one V-cycle (or time step) per "
+      "or run reaction-diffusion or LIC, and watch the solver refine one V-cycle (or time step) "
+      "per "
       "frame; or stitch a composite and paint texels to lock. Binds to 127.0.0.1; any other --host "
       "prints a random access token that every request must carry.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")

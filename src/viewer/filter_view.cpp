@@ -96,6 +96,7 @@ class FilterView final : public ViewerApp {
     FilterOptions f;
     f.alpha = options.alpha;
     f.beta = options.beta;
+    f.solver.kind = SolverKind::Multigrid;  // one V-cycle per frame refines the shown texture
     return f;
   }
 
