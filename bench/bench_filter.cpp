@@ -4,7 +4,6 @@
 
 #include <filesystem>
 
-#include "texgrad/core/heap_reuse.h"
 #include "texgrad/apps/filter.h"
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_reader.h"
@@ -53,11 +52,4 @@ BENCHMARK_CAPTURE(filterEndToEnd, direct_baseline, texgrad::SolverKind::Direct)
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  texgrad::reuseFreedMemory();  // as the CLI does
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}
+BENCHMARK_MAIN();

@@ -5,7 +5,6 @@
 #include <filesystem>
 #include <memory>
 
-#include "texgrad/core/heap_reuse.h"
 #include "texgrad/apps/geodesic.h"
 #include "texgrad/io/mesh_reader.h"
 
@@ -80,11 +79,4 @@ BENCHMARK(BM_GeodesicSetup)->Unit(benchmark::kMillisecond)->Iterations(2);
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  texgrad::reuseFreedMemory();  // as the CLI does
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}
+BENCHMARK_MAIN();

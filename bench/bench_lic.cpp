@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <memory>
 
-#include "texgrad/core/heap_reuse.h"
 #include "texgrad/apps/lic.h"
 #include "texgrad/apps/vector_field.h"
 #include "texgrad/io/mesh_reader.h"
@@ -71,11 +70,4 @@ BENCHMARK(BM_LicBob1024)->Arg(0)->Arg(1)->Unit(benchmark::kSecond)->Iterations(1
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  texgrad::reuseFreedMemory();  // as the CLI does
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}
+BENCHMARK_MAIN();

@@ -12,7 +12,6 @@
 #include <map>
 #include <string>
 
-#include "texgrad/core/heap_reuse.h"
 #include "texgrad/atlas/atlas.h"
 #include "texgrad/atlas/texel_grid.h"
 #include "texgrad/io/mesh_reader.h"
@@ -142,7 +141,6 @@ int tableRow(const std::string& mesh, int resolution) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  texgrad::reuseFreedMemory();  // as the CLI does
   if (argc == 4 && std::strcmp(argv[1], "--table") == 0)
     return tableRow(argv[2], std::atoi(argv[3]));
   benchmark::Initialize(&argc, argv);

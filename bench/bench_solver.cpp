@@ -7,7 +7,6 @@
 #include <memory>
 
 #include "../tests/solver/synthetic_problem.h"
-#include "texgrad/core/heap_reuse.h"
 #include "texgrad/apps/texel_domain.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/operators/texel_operators.h"
@@ -201,11 +200,4 @@ BENCHMARK(BM_MultigridInit)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)
 BENCHMARK(BM_MultigridUpdate)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->Iterations(2);
 BENCHMARK(BM_CholmodFactor)->Arg(1024)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_CholmodSolveRgb)->Arg(1024)->Unit(benchmark::kMillisecond)->Iterations(3);
-int main(int argc, char** argv) {
-  texgrad::reuseFreedMemory();  // as the CLI does
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}
+BENCHMARK_MAIN();

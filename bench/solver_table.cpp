@@ -16,7 +16,6 @@
 #include <string>
 #include <vector>
 
-#include "texgrad/core/heap_reuse.h"
 #include "texgrad/apps/texel_domain.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/solver/cholmod_solver.h"
@@ -179,7 +178,6 @@ int run(int argc, char** argv) {
 }  // namespace texgrad
 
 int main(int argc, char** argv) {
-  texgrad::reuseFreedMemory();  // as the CLI does
   try {
     return texgrad::run(argc, argv);
   } catch (const std::exception& e) {
