@@ -92,7 +92,7 @@ TEST_P(Fig11Slow, MultigridConvergesGeometricallyToTheDirectSolution) {
   Eigen::MatrixXd xc = Eigen::MatrixXd::Zero(p.b.rows(), p.b.cols());
   CgOptions cg;
   cg.maxIterations = 60;
-  cg.tolerance = 1e-13;
+  cg.tolerance = 1e-14;
   const SolveReport pcg = conjugateGradient(p.a, p.b, xc, multigridPreconditioner(preconditioner), cg);
   const double pcgError = (xc - p.truth).norm() / p.truth.norm();
   const double pcgFactor = std::pow(pcgError, 1.0 / std::max(1, pcg.iterations));
