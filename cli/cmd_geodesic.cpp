@@ -8,6 +8,7 @@
 #include "cli_common.h"
 #include "commands.h"
 #include "texgrad/apps/dilate.h"
+#include "texgrad/apps/distance_colour_map.h"
 #include "texgrad/apps/geodesic.h"
 #include "texgrad/apps/texel_signal.h"
 #include "texgrad/core/error.h"

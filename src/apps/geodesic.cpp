@@ -1,5 +1,6 @@
-// Heat-method geodesics (paper Sec. 7.3): source snapping, one-point gradient samples of the texel
-// basis for the normalised-gradient divergence, and the two screened-Poisson solves.
+// Heat-method geodesics (paper Sec. 7.3): one-point gradient samples of the texel basis for the
+// normalised-gradient divergence, the two screened-Poisson solves and the distance offset
+// (sources are snapped onto M in geodesic_source.cpp).
 #include "texgrad/apps/geodesic.h"
 
 #include <tbb/parallel_for.h>
@@ -12,9 +13,9 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
-#include <optional>
 #include <string>
 
+#include "apps/closest_point.h"
 #include "texgrad/core/error.h"
 
 namespace texgrad {
@@ -38,26 +39,6 @@ constexpr int kMinNearFieldTexels = 4;
 constexpr double kInsideTolerance = 1e-9;
 /// Step (texels) when walking open boundary edges to find the texels their footprints cross.
 constexpr double kBoundaryStep = 0.25;
-/// Isoline half-width in texels (lines fade out linearly to this distance from the level).
-constexpr double kIsolineHalfWidth = 0.75;
-/// How dark an isoline is at its centre (0: colour unchanged, 1: black).
-constexpr double kIsolineDarkness = 0.85;
-/// Colour of texels no source reaches in distanceColourMap.
-constexpr float kUnreachableGrey = 0.5f;
-
-/// Viridis colour map at t in [0, 1] (9 samples of matplotlib's table, linearly interpolated).
-Eigen::Vector3d viridis(double t) {
-  static const std::array<Eigen::Vector3d, 9> table{
-      Eigen::Vector3d(0.267, 0.005, 0.329), Eigen::Vector3d(0.279, 0.175, 0.483),
-      Eigen::Vector3d(0.230, 0.322, 0.546), Eigen::Vector3d(0.173, 0.449, 0.558),
-      Eigen::Vector3d(0.128, 0.567, 0.551), Eigen::Vector3d(0.158, 0.684, 0.502),
-      Eigen::Vector3d(0.369, 0.789, 0.383), Eigen::Vector3d(0.678, 0.864, 0.190),
-      Eigen::Vector3d(0.993, 0.906, 0.144)};
-  const double x = std::clamp(t, 0.0, 1.0) * static_cast<double>(table.size() - 1);
-  const size_t i = std::min(static_cast<size_t>(x), table.size() - 2);
-  const double f = x - static_cast<double>(i);
-  return (1.0 - f) * table[i] + f * table[i + 1];
-}
 
 /// Eigenvalues (smaller, larger) of a symmetric 2x2 matrix.
 std::pair<double, double> eigenvalues(const Eigen::Matrix2d& m) {
@@ -65,117 +46,6 @@ std::pair<double, double> eigenvalues(const Eigen::Matrix2d& m) {
   const double half = 0.5 * (m(0, 0) - m(1, 1));
   const double radius = std::sqrt(half * half + m(0, 1) * m(0, 1));
   return {mean - radius, mean + radius};
-}
-
-/// Barycentric coordinates of the point of triangle (a, b, c) nearest to p, in any dimension
-/// (Ericson, Real-Time Collision Detection, Sec. 5.1.5).
-template <typename Vec>
-Eigen::Vector3d closestBarycentric(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
-  const Vec ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return {1.0, 0.0, 0.0};
-  const Vec bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.0 && d4 <= d3) return {0.0, 1.0, 0.0};
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-    const double v = d1 / (d1 - d3);
-    return {1.0 - v, v, 0.0};
-  }
-  const Vec cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.0 && d5 <= d6) return {0.0, 0.0, 1.0};
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-    const double w = d2 / (d2 - d6);
-    return {1.0 - w, 0.0, w};
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return {0.0, 1.0 - w, w};
-  }
-  const double denom = 1.0 / (va + vb + vc);
-  const double v = vb * denom, w = vc * denom;
-  return {1.0 - v - w, v, w};
-}
-
-fem::SurfacePoint pointAt(const fem::TexelBasis& basis, int face, const Eigen::Vector3d& b) {
-  const auto& c = basis.faceCorners(face);
-  return {face, b[0] * c[0] + b[1] * c[1] + b[2] * c[2]};
-}
-
-ResolvedSource finish(const TexelDomain& domain, const fem::SurfacePoint& point, double snap) {
-  const fem::TexelBasis& basis = domain.operators().basis();
-  return {point, domain.grid().toUv(point.grid), basis.position(point), snap};
-}
-
-ResolvedSource resolveVertex(const TexelDomain& domain, int64_t vertex) {
-  const TexturedMesh& mesh = domain.mesh();
-  if (vertex < 0 || vertex >= static_cast<int64_t>(mesh.positions.size()))
-    throw InvalidInputError("source vertex " + std::to_string(vertex) +
-                            " is out of range; the mesh has " +
-                            std::to_string(mesh.positions.size()) + " vertices (0-based indices)");
-  const fem::TexelBasis& basis = domain.operators().basis();
-  for (int f = 0; f < basis.faceCount(); ++f) {
-    if (!basis.faceValid(f)) continue;
-    for (int c = 0; c < 3; ++c)
-      if (mesh.triangles[f][c] == vertex) {
-        Eigen::Vector3d b = Eigen::Vector3d::Zero();
-        b[c] = 1.0;
-        ResolvedSource r = finish(domain, pointAt(basis, f, b), 0.0);
-        r.position = mesh.positions[static_cast<size_t>(vertex)];
-        return r;
-      }
-  }
-  throw InvalidInputError("source vertex " + std::to_string(vertex) +
-                          " belongs to no face with texture coordinates of positive area; pick "
-                          "another vertex or a UV / 3-D source");
-}
-
-ResolvedSource resolveUv(const TexelDomain& domain, const Eigen::Vector2d& uv) {
-  if (!uv.allFinite()) throw InvalidInputError("source UV point is not finite");
-  const fem::TexelBasis& basis = domain.operators().basis();
-  const TexelGrid& grid = domain.grid();
-  const Eigen::Vector2d p = grid.toGrid(uv);
-  const Eigen::Vector2d toUv(1.0 / grid.imageWidth, 1.0 / grid.imageHeight);
-  double best = std::numeric_limits<double>::infinity();
-  fem::SurfacePoint point;
-  for (int f = 0; f < basis.faceCount() && best > 0.0; ++f) {
-    if (!basis.faceValid(f)) continue;
-    const auto& c = basis.faceCorners(f);
-    const Eigen::Vector3d b = closestBarycentric(p, c[0], c[1], c[2]);
-    const fem::SurfacePoint candidate = pointAt(basis, f, b);
-    const double d = (candidate.grid - p).cwiseProduct(toUv).norm();
-    if (d < best) {
-      best = d;
-      point = candidate;
-    }
-  }
-  if (point.face < 0) throw InvalidInputError("the mesh has no face with positive UV area");
-  return finish(domain, point, best);
-}
-
-ResolvedSource resolvePoint(const TexelDomain& domain, const Eigen::Vector3d& target) {
-  if (!target.allFinite()) throw InvalidInputError("source 3-D point is not finite");
-  const TexturedMesh& mesh = domain.mesh();
-  const fem::TexelBasis& basis = domain.operators().basis();
-  double best = std::numeric_limits<double>::infinity();
-  fem::SurfacePoint point;
-  for (int f = 0; f < basis.faceCount() && best > 0.0; ++f) {
-    if (!basis.faceValid(f)) continue;
-    const auto& t = mesh.triangles[f];
-    const Eigen::Vector3d &a = mesh.positions[t[0]], &b = mesh.positions[t[1]],
-                          &c = mesh.positions[t[2]];
-    const Eigen::Vector3d bary = closestBarycentric(target, a, b, c);
-    const double d = (bary[0] * a + bary[1] * b + bary[2] * c - target).norm();
-    if (d < best) {
-      best = d;
-      point = pointAt(basis, f, bary);
-    }
-  }
-  if (point.face < 0) throw InvalidInputError("the mesh has no face with positive UV area");
-  return finish(domain, point, best);
 }
 
 /// Per unknown: the face whose UV triangle holds the texel centre (first in index order where
@@ -208,18 +78,6 @@ std::vector<int32_t> centreFaces(const TexelDomain& domain) {
 }
 
 }  // namespace
-
-ResolvedSource resolveSource(const TexelDomain& domain, const GeodesicSource& source) {
-  switch (source.kind) {
-    case GeodesicSource::Kind::Vertex:
-      return resolveVertex(domain, source.vertex);
-    case GeodesicSource::Kind::Uv:
-      return resolveUv(domain, source.uv);
-    case GeodesicSource::Kind::Point:
-      return resolvePoint(domain, source.point);
-  }
-  throw InvalidInputError("unknown geodesic source kind");
-}
 
 GeodesicOffset parseGeodesicOffset(const std::string& text) {
   if (text == "near-field") return GeodesicOffset::NearField;
@@ -756,57 +614,6 @@ void GeodesicSolver::solve() {
   requireSources();
   diffusionStep(true);
   distanceStep(true);
-}
-
-Image distanceColourMap(const TexelGrid& grid, const Eigen::VectorXd& distances, double maxDistance,
-                        int isolines) {
-  if (distances.size() != grid.unknownCount())
-    throw InvalidInputError("distanceColourMap: expected one distance per unknown (" +
-                            std::to_string(grid.unknownCount()) + "), got " +
-                            std::to_string(distances.size()));
-  if (isolines < 0) throw InvalidInputError("isolines must be >= 0");
-  Image image(grid.imageWidth, grid.imageHeight, 3, PixelFormat::UInt8);
-  const double scale = maxDistance > 0.0 ? 1.0 / maxDistance : 0.0;
-  auto level = [&](int x, int y) -> std::optional<double> {  // distance in isoline units
-    if (x < 0 || y < 0 || x >= grid.nx || y >= grid.ny) return std::nullopt;
-    const int32_t u = grid.unknownOfTexel[static_cast<size_t>(grid.texelIndex(x, y))];
-    if (u < 0) return std::nullopt;
-    if (!std::isfinite(distances[u])) return std::nullopt;
-    return distances[u] * scale * (isolines + 1);
-  };
-  // Derivative of the level along one axis by central (or one-sided) differences.
-  auto slope = [&](double centre, std::optional<double> minus, std::optional<double> plus) {
-    if (minus && plus) return 0.5 * (*plus - *minus);
-    if (plus) return *plus - centre;
-    if (minus) return centre - *minus;
-    return 0.0;
-  };
-  tbb::parallel_for(0, grid.ny, [&](int y) {
-    for (int x = 0; x < grid.nx; ++x) {
-      if (!grid.inImage(x, y)) continue;
-      const int32_t u = grid.unknownOfTexel[static_cast<size_t>(grid.texelIndex(x, y))];
-      if (u < 0) continue;
-      if (!std::isfinite(distances[u])) {
-        for (int c = 0; c < 3; ++c) image.at(x + grid.x0, y + grid.y0, c) = kUnreachableGrey;
-        continue;
-      }
-      Eigen::Vector3d colour = viridis(distances[u] * scale);
-      if (isolines > 0) {
-        const double s = *level(x, y);
-        const double gx = slope(s, level(x - 1, y), level(x + 1, y));
-        const double gy = slope(s, level(x, y - 1), level(x, y + 1));
-        const double nearest = std::round(s);
-        const double gradient = std::hypot(gx, gy);
-        if (nearest >= 1.0 && nearest <= isolines && gradient > 0.0) {
-          const double texels = std::abs(s - nearest) / gradient;
-          colour *= 1.0 - kIsolineDarkness * std::clamp(1.0 - texels / kIsolineHalfWidth, 0.0, 1.0);
-        }
-      }
-      for (int c = 0; c < 3; ++c)
-        image.at(x + grid.x0, y + grid.y0, c) = static_cast<float>(colour[c]);
-    }
-  });
-  return image;
 }
 
 GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,

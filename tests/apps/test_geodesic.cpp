@@ -11,6 +11,7 @@
 
 #include "shared_meshes.h"
 #include "test_paths.h"
+#include "texgrad/apps/distance_colour_map.h"
 #include "texgrad/apps/geodesic.h"
 #include "texgrad/atlas/cell_clipping.h"
 #include "texgrad/core/error.h"

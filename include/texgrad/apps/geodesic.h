@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "texgrad/apps/geodesic_source.h"
 #include "texgrad/apps/system_solver.h"
 #include "texgrad/apps/texel_domain.h"
 #include "texgrad/fem/texel_basis.h"
@@ -16,35 +17,6 @@
 #include "texgrad/solver/solve_report.h"
 
 namespace texgrad {
-
-/// Where a distance source lies: a mesh vertex, a UV point or a 3-D point (model units).
-struct GeodesicSource {
-  enum class Kind : uint8_t { Vertex, Uv, Point };
-  Kind kind = Kind::Vertex;
-  int64_t vertex = -1;                              ///< Kind::Vertex: index into positions
-  Eigen::Vector2d uv = Eigen::Vector2d::Zero();     ///< Kind::Uv: texture coordinates
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< Kind::Point: 3-D position
-
-  static GeodesicSource atVertex(int64_t index) { return {Kind::Vertex, index, {}, {}}; }
-  static GeodesicSource atUv(const Eigen::Vector2d& uv) { return {Kind::Uv, -1, uv, {}}; }
-  static GeodesicSource atPoint(const Eigen::Vector3d& p) { return {Kind::Point, -1, {}, p}; }
-};
-
-/// A source snapped onto the atlas domain M.
-struct ResolvedSource {
-  fem::SurfacePoint point;                             ///< face and grid coordinates
-  Eigen::Vector2d uv = Eigen::Vector2d::Zero();        ///< texture coordinates of the point
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< 3-D position (model units)
-  /// How far the request was moved to reach M: UV units for UV sources, model units for 3-D
-  /// points, 0 for vertices.
-  double snapDistance = 0.0;
-};
-
-/// Snaps a source to the nearest point of M (faces with zero UV area are not part of M): a vertex
-/// to one of its corners, a UV point to the nearest point of a UV triangle, a 3-D point to the
-/// nearest point of a 3-D triangle. Throws InvalidInputError for a vertex index out of range or a
-/// vertex that only touches UV-degenerate faces.
-ResolvedSource resolveSource(const TexelDomain& domain, const GeodesicSource& source);
 
 /// How the additive constant of the distance is fixed (Eq. 6 determines y only up to a constant).
 enum class GeodesicOffset : uint8_t {
@@ -229,16 +201,5 @@ class GeodesicSolver {
 /// the farthest texel.
 GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,
                                 const GeodesicOptions& options = {});
-
-}  // namespace texgrad
-
-namespace texgrad {
-
-/// Picture of a distance field for people: W x H RGB (UInt8) image of the grid's texture, with a
-/// viridis ramp from 0 (dark blue) to maxDistance (yellow) on active texels and `isolines`
-/// dark, anti-aliased contour lines at k maxDistance / (isolines + 1), k = 1..isolines.
-/// Inactive texels are black, unreachable (infinite) ones grey; `distances` is per unknown.
-Image distanceColourMap(const TexelGrid& grid, const Eigen::VectorXd& distances, double maxDistance,
-                        int isolines);
 
 }  // namespace texgrad
