@@ -94,6 +94,7 @@ void runStitch(StitchArgs args) {
                {"sources", result.sources},
                {"locked_texels", result.lockedTexels},
                {"source_gains", gainsJson(result.sourceGains)},
+               {"source_illumination", gainsJson(result.sourceIllumination)},
                {"solve", toJson(result.report)},
                {"stages", timer.json()},
                {"output", args.out}});
@@ -126,8 +127,12 @@ void addStitchCommand(CLI::App& app) {
       ->default_val(1e2)
       ->check(CLI::PositiveNumber);
   cmd->add_flag("!--no-gain-compensation", args->options.compensateGains,
-                "Keep each source's exposure and colour cast (by default one gain per source and "
-                "channel, estimated where sources meet, is divided out before stitching)");
+                "Keep each source's exposure, colour cast and lighting (by default each source's "
+                "illumination, estimated where sources meet, is divided out before stitching)");
+  cmd->add_flag("!--gain-only", args->options.compensateIllumination,
+                "Compensate one gain per source and channel only; by default the gain may vary "
+                "with the surface normal, exp(a + b . n), which also removes smooth per-view "
+                "shading");
   cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: the input's)");
   addWeldToleranceOption(cmd, args->weldTolerance);
   SolverSettings solverDefaults;

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "apps/closest_point.h"
+#include "texgrad/apps/surface_normals.h"
 #include "texgrad/core/error.h"
 
 namespace texgrad {
@@ -46,35 +47,6 @@ std::pair<double, double> eigenvalues(const Eigen::Matrix2d& m) {
   const double half = 0.5 * (m(0, 0) - m(1, 1));
   const double radius = std::sqrt(half * half + m(0, 1) * m(0, 1));
   return {mean - radius, mean + radius};
-}
-
-/// Per unknown: the face whose UV triangle holds the texel centre (first in index order where
-/// UVs overlap), or -1 if the centre lies outside M.
-std::vector<int32_t> centreFaces(const TexelDomain& domain) {
-  const TexelGrid& grid = domain.grid();
-  const fem::TexelBasis& basis = domain.operators().basis();
-  std::vector<int32_t> faces(static_cast<size_t>(grid.unknownCount()), -1);
-  for (int f = 0; f < basis.faceCount(); ++f) {
-    if (!basis.faceValid(f)) continue;
-    const auto& c = basis.faceCorners(f);
-    Eigen::Matrix2d e;
-    e.col(0) = c[1] - c[0];
-    e.col(1) = c[2] - c[0];
-    const Eigen::Matrix2d inverse = e.inverse();
-    const Eigen::Vector2d lo = c[0].cwiseMin(c[1]).cwiseMin(c[2]);
-    const Eigen::Vector2d hi = c[0].cwiseMax(c[1]).cwiseMax(c[2]);
-    for (int y = std::max(0, static_cast<int>(std::ceil(lo.y())));
-         y <= std::min(grid.ny - 1, static_cast<int>(std::floor(hi.y()))); ++y)
-      for (int x = std::max(0, static_cast<int>(std::ceil(lo.x())));
-           x <= std::min(grid.nx - 1, static_cast<int>(std::floor(hi.x()))); ++x) {
-        const int32_t u = grid.unknownOfTexel[static_cast<size_t>(grid.texelIndex(x, y))];
-        if (u < 0 || faces[static_cast<size_t>(u)] >= 0) continue;
-        const Eigen::Vector2d st = inverse * (Eigen::Vector2d(x, y) - c[0]);
-        if (st.minCoeff() >= -kInsideTolerance && st.sum() <= 1.0 + kInsideTolerance)
-          faces[static_cast<size_t>(u)] = f;
-      }
-  }
-  return faces;
 }
 
 }  // namespace
@@ -630,7 +602,7 @@ GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const Geode
   // Farthest texel among those whose centre lies on M (gutter texels extrapolate past the
   // boundary); any reachable texel if no centre does (charts narrower than a texel).
   const TexelGrid& grid = domain.grid();
-  const std::vector<int32_t> faces = centreFaces(domain);
+  const std::vector<int32_t> faces = texelCentreFaces(domain);
   Eigen::Index best = -1;
   for (int pass = 0; pass < 2 && best < 0; ++pass)
     for (Eigen::Index u = 0; u < result.distances.size(); ++u) {

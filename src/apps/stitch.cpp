@@ -11,6 +11,7 @@
 #include <map>
 
 #include "texgrad/apps/gain_compensation.h"
+#include "texgrad/apps/surface_normals.h"
 #include "texgrad/apps/texel_signal.h"
 #include "texgrad/core/error.h"
 
@@ -143,15 +144,32 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
   const Eigen::MatrixXd input = gatherTexels(grid, composite);
   Eigen::MatrixXd xbar = input;
   const int channels = colourChannels(xbar.cols());
-  Eigen::MatrixXd gains = Eigen::MatrixXd::Ones(sources, channels);
+  Eigen::MatrixXd gains = Eigen::MatrixXd::Ones(sources, channels), illumination;
   if (options.compensateGains && sources > 1) {
     Eigen::VectorXd texelsPerSource = Eigen::VectorXd::Zero(sources);
     for (int32_t label : labels)
       if (label > 0) texelsPerSource[label - 1] += 1.0;
-    const auto links = compositeGainLinks(domain.operators().stiffness(), labels, xbar, channels);
-    gains = solveLogGains(sources, channels, links, texelsPerSource).array().exp();
-    for (Eigen::Index u = 0; u < xbar.rows(); ++u)
-      if (labels[u] > 0) xbar.row(u).head(channels).array() /= gains.row(labels[u] - 1).array();
+    const Eigen::SparseMatrix<double>& coupling = domain.operators().stiffness();
+    if (options.compensateIllumination) {
+      const Eigen::MatrixX3d normals = texelNormals(domain);
+      illumination = solveLogIllumination(
+          sources, channels,
+          compositeShadingSamples(coupling, labels, xbar, normals, channels), texelsPerSource);
+      std::vector<std::vector<Eigen::Index>> rows(static_cast<size_t>(sources));
+      for (Eigen::Index u = 0; u < xbar.rows(); ++u)
+        if (labels[u] > 0) rows[static_cast<size_t>(labels[u] - 1)].push_back(u);
+      for (int k = 0; k < sources; ++k) {
+        gains.row(k) = removeIllumination(illumination, k, normals, rows[static_cast<size_t>(k)],
+                                          channels, xbar)
+                           .array()
+                           .exp();
+      }
+    } else {
+      const auto links = compositeGainLinks(coupling, labels, xbar, channels);
+      gains = solveLogGains(sources, channels, links, texelsPerSource).array().exp();
+      for (Eigen::Index u = 0; u < xbar.rows(); ++u)
+        if (labels[u] > 0) xbar.row(u).head(channels).array() /= gains.row(labels[u] - 1).array();
+    }
   }
   Eigen::VectorXd known(xbar.rows());
   for (Eigen::Index u = 0; u < xbar.rows(); ++u) known[u] = labels[u] > 0 ? 1.0 : 0.0;
@@ -168,6 +186,7 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
   StitchResult result = solveStitch(domain, xbar, input, known, divergence, composite, options);
   result.sources = sources;
   result.sourceGains = gains;
+  result.sourceIllumination = illumination;
   return result;
 }
 
@@ -213,19 +232,35 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
   const Eigen::MatrixXd input = blend(values);
   const int colour = colourChannels(channels);
   const int sources = static_cast<int>(partials.size());
-  Eigen::MatrixXd gains = Eigen::MatrixXd::Ones(sources, colour);
+  Eigen::MatrixXd gains = Eigen::MatrixXd::Ones(sources, colour), illumination;
   if (options.compensateGains && sources > 1) {
     Eigen::VectorXd texelsPerSource = Eigen::VectorXd::Zero(sources);
     for (int i = 0; i < sources; ++i)
       texelsPerSource[i] =
           static_cast<double>((confidence[static_cast<size_t>(i)].array() > 0.0).count());
-    gains = solveLogGains(sources, colour, partialGainLinks(values, confidence, colour),
-                          texelsPerSource)
+    if (options.compensateIllumination) {
+      const Eigen::MatrixX3d normals = texelNormals(domain);
+      illumination = solveLogIllumination(
+          sources, colour, partialShadingSamples(values, confidence, normals, colour),
+          texelsPerSource);
+      for (int i = 0; i < sources; ++i) {
+        std::vector<Eigen::Index> seen;
+        for (Eigen::Index u = 0; u < n; ++u)
+          if (confidence[static_cast<size_t>(i)][u] > 0.0) seen.push_back(u);
+        gains.row(i) =
+            removeIllumination(illumination, i, normals, seen, colour, values[static_cast<size_t>(i)])
                 .array()
                 .exp();
-    for (int i = 0; i < sources; ++i)
-      for (Eigen::Index u = 0; u < n; ++u)
-        values[static_cast<size_t>(i)].row(u).head(colour).array() /= gains.row(i).array();
+      }
+    } else {
+      gains = solveLogGains(sources, colour, partialGainLinks(values, confidence, colour),
+                            texelsPerSource)
+                  .array()
+                  .exp();
+      for (int i = 0; i < sources; ++i)
+        for (Eigen::Index u = 0; u < n; ++u)
+          values[static_cast<size_t>(i)].row(u).head(colour).array() /= gains.row(i).array();
+    }
   }
   const Eigen::MatrixXd xbar = blend(values);
   // A partial's weight on a cell = its smallest confidence over the cell's texels; the target
@@ -254,6 +289,7 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
   StitchResult result = solveStitch(domain, xbar, input, known, divergence, like, options);
   result.sources = sources;
   result.sourceGains = gains;
+  result.sourceIllumination = illumination;
   return result;
 }
 

@@ -29,6 +29,24 @@ struct GainLink {
 Eigen::MatrixXd solveLogGains(int sources, int channels, const std::vector<GainLink>& links,
                               const Eigen::VectorXd& texelsPerSource);
 
+/// Two sources' observations of (nearly) the same surface point, for the illumination model:
+/// log(x_a / x_b) per colour channel, and the surface normal where each was taken.
+struct ShadingSample {
+  int a = 0, b = 0;            ///< source indices, 0-based
+  Eigen::Vector3f na, nb;      ///< unit surface normals at the two observations
+  Eigen::Vector3f logRatio;    ///< per channel (first `channels` entries), log(x_a) - log(x_b)
+};
+
+/// Illumination per source beyond one gain: log x_k(p) = log t(p) + a_k + b_k . n(p), the
+/// first-order spherical-harmonic approximation of how a view's lighting scales a diffuse
+/// surface (Ramamoorthi & Hanrahan, "An Efficient Representation for Irradiance Environment
+/// Maps", SIGGRAPH 2001). Fitted by Huber-weighted least squares (robust to texture edges) with
+/// a small ridge that fixes the unobservable common part. Returns (4 sources) x channels:
+/// rows 4k .. 4k + 3 hold a_k, b_k for source k.
+Eigen::MatrixXd solveLogIllumination(int sources, int channels,
+                                     const std::vector<ShadingSample>& samples,
+                                     const Eigen::VectorXd& texelsPerSource);
+
 /// Links from a composite: pairs of coupled unknowns (non-zeros of `coupling`, e.g. the
 /// stiffness) whose source labels differ (labels 1..sources, 0 = none).
 std::vector<GainLink> compositeGainLinks(const Eigen::SparseMatrix<double>& coupling,
@@ -39,5 +57,24 @@ std::vector<GainLink> compositeGainLinks(const Eigen::SparseMatrix<double>& coup
 std::vector<GainLink> partialGainLinks(const std::vector<Eigen::MatrixXd>& values,
                                        const std::vector<Eigen::VectorXd>& confidence,
                                        int channels);
+
+/// Illumination samples from a composite: coupled unknowns with different source labels, as in
+/// compositeGainLinks; `normals` holds one unit normal per unknown. At most ~200k, evenly spread.
+std::vector<ShadingSample> compositeShadingSamples(const Eigen::SparseMatrix<double>& coupling,
+                                                   const std::vector<int32_t>& labels,
+                                                   const Eigen::MatrixXd& values,
+                                                   const Eigen::MatrixX3d& normals, int channels);
+
+/// Illumination samples from partial textures: texels two partials both see.
+std::vector<ShadingSample> partialShadingSamples(const std::vector<Eigen::MatrixXd>& values,
+                                                 const std::vector<Eigen::VectorXd>& confidence,
+                                                 const Eigen::MatrixX3d& normals, int channels);
+
+/// Divides out source k's illumination exp(a_k + b_k . n) (from solveLogIllumination) from the
+/// first `channels` channels of rows `rows` of values; returns the mean log illumination over
+/// those rows per channel (the log of the source's geometric-mean gain).
+Eigen::RowVectorXd removeIllumination(const Eigen::MatrixXd& illumination, int source,
+                        const Eigen::MatrixX3d& normals, const std::vector<Eigen::Index>& rows,
+                        int channels, Eigen::MatrixXd& values);
 
 }  // namespace texgrad

@@ -24,6 +24,10 @@ struct StitchOptions {
   /// paper: cameras differ by exposure and colour cast, which the screening would otherwise keep
   /// away from source boundaries). See gain_compensation.h.
   bool compensateGains = true;
+  /// With compensateGains: let each source's gain vary with the surface normal,
+  /// exp(a_k + b_k . n), the first-order model of a view's lighting on a diffuse surface, so that
+  /// smooth shading differences inside sources go too (solveLogIllumination).
+  bool compensateIllumination = true;
   SolverSettings solver;
   /// Throws InvalidInputError naming the first bad field.
   void validate() const;
@@ -37,6 +41,8 @@ struct StitchResult {
   int64_t lockedTexels = 0;  ///< texels held at their input value
   /// Gain divided out of each source per colour channel (sources x channels; ones when off).
   Eigen::MatrixXd sourceGains;
+  /// With compensateIllumination: rows 4k .. 4k + 3 = a_k, b_k per colour channel (else empty).
+  Eigen::MatrixXd sourceIllumination;
 };
 
 /// Composite mode: `composite` holds each texel from one source, `segments` a distinct colour
