@@ -41,20 +41,21 @@ void InteractiveFilter::setParameters(double alpha, double beta, std::vector<dou
     throw InvalidInputError("beta map has " + std::to_string(betaPerCell.size()) +
                             " cells, the grid has " +
                             std::to_string(domain_.grid().cellCoverage.size()));
-  const Eigen::SparseMatrix<double> sBeta =
-      betaPerCell.empty() ? Eigen::SparseMatrix<double>(beta * ops.stiffness())
-                          : ops.modulatedStiffness(betaPerCell);
-  rhs_ = alpha * (ops.mass() * x0_) + sBeta * x0_;
+  // Products with the operators as they are: no scaled copy of S (hundreds of MB at 2048²).
+  rhs_ = alpha * (ops.mass() * x0_);
+  if (betaPerCell.empty())
+    rhs_ += beta * (ops.stiffness() * x0_);
+  else
+    rhs_ += ops.modulatedStiffness(betaPerCell) * x0_;
   // The system matrix depends on alpha only: painting beta changes just the right-hand side.
   if (alpha == alpha_) return;
   const bool first = alpha_ == 0.0;
   alpha_ = alpha;
   // alpha M + S (+ alpha lambda C, paper §4.2); the pattern is the same for every alpha.
-  const Eigen::SparseMatrix<double> system = ops.screenedSystem(alpha);
   if (first)
-    solver_.initAndUpdate(system);
+    solver_.initAndUpdate(ops.screenedSystem(alpha));
   else
-    solver_.update(system);
+    solver_.update(ops.screenedSystem(alpha));
 }
 
 SolveReport InteractiveFilter::step() {

@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <utility>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -217,12 +218,12 @@ LineIntegralConvolution::LineIntegralConvolution(TexelDomain& domain,
   ops.setMetric(g);
 
   const auto solverStart = std::chrono::steady_clock::now();
-  s.diffusion.initAndUpdate(system);
+  s.diffusion.initAndUpdate(std::move(system));
   if (s.sharpens()) {
     SparseMatrixd sharpenSystem = options.sharpenAlpha * s.mass + s.stiffness;
     pinNegligibleTexels(s.mass, options.sharpenAlpha, sharpenSystem);
     s.sharpening.emplace(domain.grid(), options.solver);
-    s.sharpening->initAndUpdate(sharpenSystem);
+    s.sharpening->initAndUpdate(std::move(sharpenSystem));
   }
   s.setup.solverSetupSeconds = secondsSince(solverStart);
   s.setup.setupSeconds = secondsSince(start);

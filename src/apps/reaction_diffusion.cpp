@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <utility>
 #include <chrono>
 #include <cmath>
 #include <random>
@@ -200,8 +201,8 @@ ReactionDiffusion::ReactionDiffusion(const TexelDomain& domain,
   SparseMatrixd systemV = ops.mass() + (dt * options.diffusionV) * ops.stiffness();
   pinNegligibleTexels(ops.mass(), systemU);
   pinNegligibleTexels(ops.mass(), systemV);
-  impl_->solverU.initAndUpdate(systemU);
-  impl_->solverV.initAndUpdate(systemV);
+  impl_->solverU.initAndUpdate(std::move(systemU));
+  impl_->solverV.initAndUpdate(std::move(systemV));
   impl_->seedState(options.seed);
 }
 

@@ -7,6 +7,7 @@
 #include "texgrad/apps/stitch.h"
 
 #include <array>
+#include <utility>
 #include <cmath>
 #include <map>
 
@@ -70,7 +71,7 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
     }
   }
   SystemSolver solver(grid, options.solver);
-  solver.initAndUpdate(a);
+  solver.initAndUpdate(std::move(a));
   Eigen::MatrixXd x = xbar;
   result.report = solver.solve(rhs, x);
   for (Eigen::Index u = 0; u < n; ++u)

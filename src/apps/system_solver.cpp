@@ -7,6 +7,7 @@
 #include <tbb/task_arena.h>
 
 #include <chrono>
+#include <utility>
 #include <cmath>
 
 #include "texgrad/core/error.h"
@@ -269,33 +270,33 @@ void SystemSolver::init(const Eigen::SparseMatrix<double>& pattern) {
   impl_->initTime = secondsSince(start);
 }
 
-void SystemSolver::update(const Eigen::SparseMatrix<double>& a) {
+void SystemSolver::update(Eigen::SparseMatrix<double> a) {
   const auto start = std::chrono::steady_clock::now();
-  impl_->a = a;
+  impl_->a = std::move(a);
   impl_->a.makeCompressed();
   impl_->cacheValid = false;
   if (impl_->settings.kind == SolverKind::Direct)
-    impl_->direct.factorize(a);
+    impl_->direct.factorize(impl_->a);
   else
     impl_->visitMultigrid([&](auto& solver) {
-      solver.update(a);
+      solver.update(impl_->a);
       return 0;
     });
   impl_->updateTime = secondsSince(start);
 }
 
-void SystemSolver::initAndUpdate(const Eigen::SparseMatrix<double>& a) {
+void SystemSolver::initAndUpdate(Eigen::SparseMatrix<double> a) {
   if (impl_->settings.kind == SolverKind::Direct) {
     init(a);
-    update(a);
+    update(std::move(a));
     return;
   }
   const auto start = std::chrono::steady_clock::now();
-  impl_->a = a;
+  impl_->a = std::move(a);
   impl_->a.makeCompressed();
   impl_->cacheValid = false;
   impl_->visitMultigrid([&](auto& solver) {
-    solver.initAndUpdate(impl_->grid, a);
+    solver.initAndUpdate(impl_->grid, impl_->a);
     return 0;
   });
   impl_->initTime = secondsSince(start);

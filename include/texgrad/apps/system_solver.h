@@ -50,10 +50,11 @@ class SystemSolver {
 
   /// Symbolic phase for the sparsity pattern of every later A (values unused).
   void init(const Eigen::SparseMatrix<double>& pattern);
-  /// Numeric phase for a new A with the same pattern (new alpha, beta or metric).
-  void update(const Eigen::SparseMatrix<double>& a);
+  /// Numeric phase for a new A with the same pattern (new alpha, beta or metric). The solver
+  /// keeps A for residuals: pass a temporary (or std::move) to spare a copy.
+  void update(Eigen::SparseMatrix<double> a);
   /// init(a) then update(a); multigrid forms its Galerkin products once instead of twice.
-  void initAndUpdate(const Eigen::SparseMatrix<double>& a);
+  void initAndUpdate(Eigen::SparseMatrix<double> a);
   /// Solves A X = B (n x k), using X as the initial guess for the iterative kinds.
   SolveReport solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
   /// One V-cycle (Multigrid and MultigridCg kinds) or an exact solve (Direct), for interactive
