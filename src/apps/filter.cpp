@@ -8,6 +8,7 @@
 #include "texgrad/apps/normal_map.h"
 #include "texgrad/apps/texel_signal.h"
 #include "texgrad/core/error.h"
+#include "texgrad/solver/conjugate_gradient.h"
 
 namespace texgrad {
 
@@ -41,12 +42,15 @@ void InteractiveFilter::setParameters(double alpha, double beta, std::vector<dou
     throw InvalidInputError("beta map has " + std::to_string(betaPerCell.size()) +
                             " cells, the grid has " +
                             std::to_string(domain_.grid().cellCoverage.size()));
-  // Products with the operators as they are: no scaled copy of S (hundreds of MB at 2048²).
-  rhs_ = alpha * (ops.mass() * x0_);
+  // Products with the operators as they are (no scaled copy of S, hundreds of MB at 2048²), on
+  // all cores.
+  Eigen::MatrixXd stiffnessTerm;
+  symmetricProduct(ops.mass(), x0_, rhs_);
   if (betaPerCell.empty())
-    rhs_ += beta * (ops.stiffness() * x0_);
+    symmetricProduct(ops.stiffness(), x0_, stiffnessTerm);
   else
-    rhs_ += ops.modulatedStiffness(betaPerCell) * x0_;
+    symmetricProduct(ops.modulatedStiffness(betaPerCell), x0_, stiffnessTerm);
+  rhs_ = alpha * rhs_ + (betaPerCell.empty() ? beta : 1.0) * stiffnessTerm;
   // The system matrix depends on alpha only: painting beta changes just the right-hand side.
   if (alpha == alpha_) return;
   const bool first = alpha_ == 0.0;

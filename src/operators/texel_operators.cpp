@@ -288,7 +288,24 @@ const fem::TexelBasis& TexelOperators::basis() const { return impl_->basis; }
 const OperatorReport& TexelOperators::report() const { return impl_->report; }
 
 SparseMatrixd TexelOperators::screenedSystem(double alpha) const {
-  SparseMatrixd system = alpha * impl_->mass + impl_->stiffness;
+  const SparseMatrixd& m = impl_->mass;
+  const SparseMatrixd& s = impl_->stiffness;
+  const bool samePattern =
+      m.isCompressed() && s.isCompressed() && m.nonZeros() == s.nonZeros() &&
+      std::equal(m.outerIndexPtr(), m.outerIndexPtr() + m.outerSize() + 1, s.outerIndexPtr()) &&
+      std::equal(m.innerIndexPtr(), m.innerIndexPtr() + m.nonZeros(), s.innerIndexPtr());
+  SparseMatrixd system;
+  if (samePattern) {  // M and S share the pair pattern: combine values, no sparse merge
+    system = s;
+    double* out = system.valuePtr();
+    const double* mv = m.valuePtr();
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, system.nonZeros(), 1 << 16),
+                      [&](const tbb::blocked_range<Eigen::Index>& r) {
+                        for (Eigen::Index k = r.begin(); k != r.end(); ++k) out[k] += alpha * mv[k];
+                      });
+  } else {
+    system = alpha * m + s;
+  }
   if (impl_->options.seamContinuityWeight != 0.0)
     system += (alpha * impl_->options.seamContinuityWeight) * impl_->seamContinuity;
   return system;

@@ -5,6 +5,9 @@
 #include <array>
 #include <limits>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "texgrad/core/error.h"
 
 namespace texgrad {
@@ -125,23 +128,36 @@ GridLevel buildCoarseLevel(const GridLevel& fine) {
 }
 
 Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridLevel& coarse) {
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(static_cast<size_t>(fine.unknownCount()) * 4);
-  for (int u = 0; u < fine.unknownCount(); ++u) {
+  // Row-major first: every fine row has at most four parents, known in advance; the column-major
+  // copy at the end is one linear pass (setFromTriplets would sort millions of entries).
+  using RowMajor = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+  const int n = fine.unknownCount();
+  RowMajor rows(n, coarse.unknownCount());
+  std::vector<int> start(static_cast<size_t>(n) + 1, 0);
+  for (int u = 0; u < n; ++u) {
     const size_t su = static_cast<size_t>(u);
-    const GridBox& box = coarse.boxes[static_cast<size_t>(
-        coarse.boxOfChart[static_cast<size_t>(fine.chartOfUnknown[su])])];
-    const Parents px = parentsOf(fine.xOfUnknown[su]), py = parentsOf(fine.yOfUnknown[su]);
-    for (int j = 0; j < py.count; ++j)
-      for (int i = 0; i < px.count; ++i) {
-        const int64_t s = box.slot(px.index[static_cast<size_t>(i)], py.index[static_cast<size_t>(j)]);
-        triplets.emplace_back(u, coarse.unknownOfSlot[static_cast<size_t>(s)],
-                              px.weight[static_cast<size_t>(i)] * py.weight[static_cast<size_t>(j)]);
-      }
+    start[su + 1] = start[su] + parentsOf(fine.xOfUnknown[su]).count *
+                                    parentsOf(fine.yOfUnknown[su]).count;
   }
-  Eigen::SparseMatrix<double> p(fine.unknownCount(), coarse.unknownCount());
-  p.setFromTriplets(triplets.begin(), triplets.end());
-  return p;
+  rows.resizeNonZeros(start.back());
+  std::copy(start.begin(), start.end(), rows.outerIndexPtr());
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int u = r.begin(); u != r.end(); ++u) {
+      const size_t su = static_cast<size_t>(u);
+      const GridBox& box = coarse.boxes[static_cast<size_t>(
+          coarse.boxOfChart[static_cast<size_t>(fine.chartOfUnknown[su])])];
+      const Parents px = parentsOf(fine.xOfUnknown[su]), py = parentsOf(fine.yOfUnknown[su]);
+      int k = start[su];
+      for (int j = 0; j < py.count; ++j)  // slot order = increasing coarse index
+        for (int i = 0; i < px.count; ++i, ++k) {
+          const int64_t slot =
+              box.slot(px.index[static_cast<size_t>(i)], py.index[static_cast<size_t>(j)]);
+          rows.innerIndexPtr()[k] = coarse.unknownOfSlot[static_cast<size_t>(slot)];
+          rows.valuePtr()[k] = px.weight[static_cast<size_t>(i)] * py.weight[static_cast<size_t>(j)];
+        }
+    }
+  });
+  return Eigen::SparseMatrix<double>(rows);
 }
 
 }  // namespace
