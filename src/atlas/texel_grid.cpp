@@ -2,7 +2,10 @@
 // (DESIGN.md §2): active if a footprint cell is covered, interior if all four lie in one chart.
 #include "texgrad/atlas/texel_grid.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -46,12 +49,22 @@ void setExtent(const TexturedMesh& mesh, TexelGrid& g) {
   g.ny = static_cast<int>(std::ceil(hy)) - g.y0 + 1;
 }
 
-/// Accumulates covered area per cell and the charts meeting each cell.
-void coverCells(const TexturedMesh& mesh, const Atlas& atlas, TexelGrid& g,
-                std::vector<double>& area, std::vector<uint8_t>& multi) {
+/// Faces per parallel clipping task.
+constexpr int32_t kFacesPerTask = 256;
+
+/// A face's share of one cell.
+struct CellShare {
+  int32_t cell;
+  int32_t chart;
+  double area;
+};
+
+/// Clips faces [begin, end) to the cell lattice, appending their cell shares in face order.
+void clipFaces(const TexturedMesh& mesh, const Atlas& atlas, const TexelGrid& g, int32_t begin,
+               int32_t end, std::vector<CellShare>& shares) {
   FaceClip clip;
   std::array<std::vector<EdgeEvent>, 3> events;
-  for (int32_t f = 0; f < static_cast<int32_t>(mesh.faceCount()); ++f) {
+  for (int32_t f = begin; f < end; ++f) {
     std::array<Eigen::Vector2d, 3> c;
     for (int k = 0; k < 3; ++k) c[k] = g.toGrid(mesh.uvs[mesh.uvTriangles[f][k]]);
     if (uvTriangleArea2(c) == 0.0) continue;  // UV-degenerate: covers nothing
@@ -61,14 +74,31 @@ void coverCells(const TexturedMesh& mesh, const Atlas& atlas, TexelGrid& g,
       spans[e] = events[e];
     }
     clipTriangleToCells(c, spans, clip);
-    const int32_t chart = atlas.chartOfFace[f];
-    for (const FacePiece& piece : clip.pieces) {
-      const int cell = g.cellIndex(piece.cellX, piece.cellY);
-      area[cell] += piece.full ? 1.0 : polygonArea(clip.polygon(piece));
-      int32_t& owner = g.cellChart[cell];
-      if (owner >= 0 && owner != chart) multi[cell] = 1;
-      if (owner < 0 || chart < owner) owner = chart;
+    for (const FacePiece& piece : clip.pieces)
+      shares.push_back({g.cellIndex(piece.cellX, piece.cellY), atlas.chartOfFace[f],
+                        piece.full ? 1.0 : polygonArea(clip.polygon(piece))});
+  }
+}
+
+/// Accumulates covered area per cell and the charts meeting each cell. Faces are clipped in
+/// parallel; the sums run in face order, so the result does not depend on the thread count.
+void coverCells(const TexturedMesh& mesh, const Atlas& atlas, TexelGrid& g,
+                std::vector<double>& area, std::vector<uint8_t>& multi) {
+  const auto faces = static_cast<int32_t>(mesh.faceCount());
+  const int32_t tasks = (faces + kFacesPerTask - 1) / kFacesPerTask;
+  std::vector<std::vector<CellShare>> shares(static_cast<size_t>(tasks));
+  tbb::parallel_for(0, tasks, [&](int32_t t) {
+    clipFaces(mesh, atlas, g, t * kFacesPerTask, std::min(faces, (t + 1) * kFacesPerTask),
+              shares[static_cast<size_t>(t)]);
+  });
+  for (std::vector<CellShare>& task : shares) {
+    for (const CellShare& share : task) {
+      area[static_cast<size_t>(share.cell)] += share.area;
+      int32_t& owner = g.cellChart[static_cast<size_t>(share.cell)];
+      if (owner >= 0 && owner != share.chart) multi[static_cast<size_t>(share.cell)] = 1;
+      if (owner < 0 || share.chart < owner) owner = share.chart;
     }
+    std::vector<CellShare>().swap(task);
   }
 }
 
