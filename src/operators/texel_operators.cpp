@@ -5,8 +5,10 @@
 
 #include <Eigen/LU>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 
 #include "texel_operators_impl.h"
@@ -96,24 +98,37 @@ void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
   });
   reportProgress(progress, "integrate pieces", 0.6);
   // Concatenate in chunk order, then stable-sort plain pieces by band.
-  std::vector<FullPiece> fullAll;
-  std::vector<PartialPiece> partialAll;
-  for (Chunk& chunk : out) {
-    fullAll.insert(fullAll.end(), chunk.full.begin(), chunk.full.end());
-    partialAll.insert(partialAll.end(), chunk.partial.begin(), chunk.partial.end());
-    const auto texelBase = static_cast<int32_t>(seamTexels.size());
-    const auto valueBase = static_cast<int64_t>(seamValues.size());
-    for (SeamPiece sp : chunk.seam) {
-      sp.texelBegin += texelBase;
-      sp.texelEnd += texelBase;
-      sp.valueBegin += valueBase;
-      seam.push_back(sp);
-    }
-    seamTexels.insert(seamTexels.end(), chunk.texels.begin(), chunk.texels.end());
-    seamValues.insert(seamValues.end(), chunk.values.begin(), chunk.values.end());
-    report.unexpectedCrossings += chunk.unexpected;
-    chunk = Chunk();
+  // Chunk offsets into the concatenated arrays, then every chunk copied on its own task.
+  struct Offsets {
+    size_t full = 0, partial = 0, seam = 0, texels = 0, values = 0;
+  };
+  std::vector<Offsets> at(out.size() + 1);
+  for (size_t c = 0; c < out.size(); ++c) {
+    at[c + 1] = {at[c].full + out[c].full.size(), at[c].partial + out[c].partial.size(),
+                 at[c].seam + out[c].seam.size(), at[c].texels + out[c].texels.size(),
+                 at[c].values + out[c].values.size()};
+    report.unexpectedCrossings += out[c].unexpected;
   }
+  std::vector<FullPiece> fullAll(at.back().full);
+  std::vector<PartialPiece> partialAll(at.back().partial);
+  seam.resize(at.back().seam);
+  seamTexels.resize(at.back().texels);
+  seamValues.resize(at.back().values);
+  tbb::parallel_for(size_t(0), out.size(), [&](size_t c) {
+    Chunk& chunk = out[c];
+    std::copy(chunk.full.begin(), chunk.full.end(), fullAll.begin() + at[c].full);
+    std::copy(chunk.partial.begin(), chunk.partial.end(), partialAll.begin() + at[c].partial);
+    std::copy(chunk.texels.begin(), chunk.texels.end(), seamTexels.begin() + at[c].texels);
+    std::copy(chunk.values.begin(), chunk.values.end(), seamValues.begin() + at[c].values);
+    for (size_t k = 0; k < chunk.seam.size(); ++k) {
+      SeamPiece sp = chunk.seam[k];
+      sp.texelBegin += static_cast<int32_t>(at[c].texels);
+      sp.texelEnd += static_cast<int32_t>(at[c].texels);
+      sp.valueBegin += static_cast<int64_t>(at[c].values);
+      seam[at[c].seam + k] = sp;
+    }
+    chunk = Chunk();
+  });
   bandCount = band(basis.grid().ny - 1) + 1;
   auto bucket = [&](auto& all, auto& sorted, std::vector<int64_t>& begin) {
     begin.assign(bandCount + 1, 0);
@@ -145,36 +160,49 @@ void TexelOperators::Impl::buildPattern() {
     for (int32_t i = sp.texelBegin; i < sp.texelEnd; ++i)
       for (int32_t j = sp.texelBegin; j < sp.texelEnd; ++j)
         extra.emplace_back(seamTexels[i], seamTexels[j]);
-  std::sort(extra.begin(), extra.end());
+  tbb::parallel_sort(extra.begin(), extra.end());
   extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
   const int n = grid.unknownCount();
-  std::vector<int32_t> outer(n + 1, 0);
-  std::vector<int32_t> inner;
-  inner.reserve(static_cast<size_t>(n) * 9);
-  std::vector<int32_t> column;
-  size_t e = 0;
-  for (int u = 0; u < n; ++u) {
-    column.clear();
-    const int t = grid.texelOfUnknown[u];
-    const int x = t % grid.nx, y = t / grid.nx;
-    for (int b = y - 1; b <= y; ++b)
-      for (int a = x - 1; a <= x; ++a) {
-        if (!cellCovered[grid.cellIndex(a, b)]) continue;
-        for (int32_t v : basis.cellTexels(a, b))
-          if (v >= 0) column.push_back(v);
-      }
-    while (e < extra.size() && extra[e].first == u) column.push_back(extra[e++].second);
-    std::sort(column.begin(), column.end());
-    column.erase(std::unique(column.begin(), column.end()), column.end());
-    inner.insert(inner.end(), column.begin(), column.end());
-    outer[u + 1] = static_cast<int32_t>(inner.size());
-  }
+  // Columns in blocks of unknowns on all cores, each block into its own buffer, then one copy.
+  constexpr int kBlock = 1 << 14;
+  const int blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::vector<int32_t>> blockInner(static_cast<size_t>(blocks));
+  std::vector<int32_t> columnSize(static_cast<size_t>(n), 0);
+  tbb::parallel_for(0, blocks, [&](int block) {
+    const int first = block * kBlock, last = std::min(n, first + kBlock);
+    std::vector<int32_t>& out = blockInner[static_cast<size_t>(block)];
+    out.reserve(static_cast<size_t>(last - first) * 9);
+    auto e = std::lower_bound(extra.begin(), extra.end(),
+                              std::pair<int32_t, int32_t>(first, std::numeric_limits<int32_t>::min()));
+    std::vector<int32_t> column;
+    for (int u = first; u < last; ++u) {
+      column.clear();
+      const int t = grid.texelOfUnknown[u];
+      const int x = t % grid.nx, y = t / grid.nx;
+      for (int b = y - 1; b <= y; ++b)
+        for (int a = x - 1; a <= x; ++a) {
+          if (!cellCovered[grid.cellIndex(a, b)]) continue;
+          for (int32_t v : basis.cellTexels(a, b))
+            if (v >= 0) column.push_back(v);
+        }
+      for (; e != extra.end() && e->first == u; ++e) column.push_back(e->second);
+      std::sort(column.begin(), column.end());
+      column.erase(std::unique(column.begin(), column.end()), column.end());
+      out.insert(out.end(), column.begin(), column.end());
+      columnSize[static_cast<size_t>(u)] = static_cast<int32_t>(column.size());
+    }
+  });
   // The mass matrix holds the shared pattern (no separate copy: it is the largest structure).
   mass.resize(n, n);
-  mass.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
-  std::copy(outer.begin(), outer.end(), mass.outerIndexPtr());
-  std::copy(inner.begin(), inner.end(), mass.innerIndexPtr());
-  std::fill(mass.valuePtr(), mass.valuePtr() + inner.size(), 0.0);
+  int* outer = mass.outerIndexPtr();
+  outer[0] = 0;
+  for (int u = 0; u < n; ++u) outer[u + 1] = outer[u] + columnSize[static_cast<size_t>(u)];
+  mass.resizeNonZeros(outer[n]);
+  tbb::parallel_for(0, blocks, [&](int block) {
+    const std::vector<int32_t>& in = blockInner[static_cast<size_t>(block)];
+    std::copy(in.begin(), in.end(), mass.innerIndexPtr() + outer[block * kBlock]);
+    std::fill_n(mass.valuePtr() + outer[block * kBlock], in.size(), 0.0);
+  });
 }
 
 namespace {
