@@ -100,14 +100,25 @@ void assignInteriorNextToBoundary(const GridLevel& level, const Eigen::SparseMat
   fix = {};
   fix.ptr.push_back(0);
   system.fixupSlots.clear();
-  for (int u : system.interiorUnknowns) {
+  // Few interior unknowns touch the boundary: find them on all cores, then fill in order.
+  const std::vector<int32_t>& interior = system.interiorUnknowns;
+  std::vector<uint8_t> touches(interior.size(), 0);
+  tbb::parallel_for(size_t(0), interior.size(), [&](size_t k) {
+    for (SparseIt it(a, interior[k]); it; ++it)
+      if (system.boundaryOfUnknown[static_cast<size_t>(it.row())] >= 0) {
+        touches[k] = 1;
+        return;
+      }
+  });
+  for (size_t k = 0; k < interior.size(); ++k) {
+    if (!touches[k]) continue;
+    const int u = interior[k];
     for (SparseIt it(a, u); it; ++it) {
       const int jb = system.boundaryOfUnknown[static_cast<size_t>(it.row())];
       if (jb < 0) continue;
       fix.col.push_back(jb);
       fix.val.push_back(it.value());
     }
-    if (static_cast<int64_t>(fix.col.size()) == fix.ptr.back()) continue;
     fix.ptr.push_back(static_cast<int64_t>(fix.col.size()));
     system.fixupSlots.push_back(level.slotOfUnknown[static_cast<size_t>(u)]);
   }
@@ -122,6 +133,11 @@ void classifyLevel(const GridLevel& level, const Eigen::SparseMatrix<double>& pa
     throw InvalidInputError("multigrid: matrix is " + std::to_string(pattern.rows()) + " x " +
                             std::to_string(pattern.cols()) + " but the level has " +
                             std::to_string(n) + " unknowns");
+  std::vector<uint8_t> interior(static_cast<size_t>(n), 0);
+  tbb::parallel_for(0, n, [&](int u) {
+    const size_t su = static_cast<size_t>(u);
+    interior[su] = level.footprintInterior[su] && rowIsStencil(level, pattern, u);
+  });
   system.kind.assign(static_cast<size_t>(level.slotCount), SlotKind::Empty);
   system.boundaryOfUnknown.assign(static_cast<size_t>(n), -1);
   system.boundarySlots.clear();
@@ -129,7 +145,7 @@ void classifyLevel(const GridLevel& level, const Eigen::SparseMatrix<double>& pa
   for (int u = 0; u < n; ++u) {
     const size_t su = static_cast<size_t>(u);
     const int64_t slot = level.slotOfUnknown[su];
-    if (level.footprintInterior[su] && rowIsStencil(level, pattern, u)) {
+    if (interior[su]) {
       system.kind[static_cast<size_t>(slot)] = SlotKind::Interior;
       system.interiorUnknowns.push_back(u);
     } else {

@@ -13,6 +13,7 @@
 #include <ostream>
 #include <sstream>
 
+#include "texgrad/solver/galerkin.h"
 #include "solver/grid_kernels.h"
 #include "texgrad/core/error.h"
 
@@ -44,38 +45,6 @@ void shiftDiagonal(Eigen::SparseMatrix<double>& a) {
   for (int k = 0; k < a.outerSize(); ++k)
     for (Eigen::SparseMatrix<double>::InnerIterator it(a, k); it; ++it)
       if (it.row() == k) it.valueRef() += shift;
-}
-
-/// Column blocks of a sparse product computed in parallel (Eigen's product is serial); a fixed
-/// number of blocks, so the result does not depend on the thread count.
-constexpr int kProductBlocks = 4;
-
-/// C = A B (column-major, compressed), as kProductBlocks column blocks of B in parallel.
-Eigen::SparseMatrix<double> blockedProduct(const Eigen::SparseMatrix<double>& a,
-                                           const Eigen::SparseMatrix<double>& b) {
-  using Sparse = Eigen::SparseMatrix<double>;
-  const Eigen::Index n = b.cols();
-  std::vector<Sparse> parts(kProductBlocks);
-  tbb::parallel_for(0, kProductBlocks, [&](int k) {
-    const Eigen::Index first = n * k / kProductBlocks, last = n * (k + 1) / kProductBlocks;
-    parts[static_cast<size_t>(k)] = a * b.middleCols(first, last - first);
-    parts[static_cast<size_t>(k)].makeCompressed();
-  });
-  Eigen::Index nonZeros = 0;
-  for (const Sparse& part : parts) nonZeros += part.nonZeros();
-  Sparse c(a.rows(), n);
-  c.resizeNonZeros(nonZeros);
-  Eigen::Index column = 0, offset = 0;
-  for (const Sparse& part : parts) {
-    std::copy_n(part.innerIndexPtr(), part.nonZeros(), c.innerIndexPtr() + offset);
-    std::copy_n(part.valuePtr(), part.nonZeros(), c.valuePtr() + offset);
-    for (Eigen::Index j = 0; j < part.cols(); ++j)
-      c.outerIndexPtr()[column + j] = static_cast<int>(offset + part.outerIndexPtr()[j]);
-    column += part.cols();
-    offset += part.nonZeros();
-  }
-  c.outerIndexPtr()[n] = static_cast<int>(offset);
-  return c;
 }
 
 using Clock = std::chrono::steady_clock;
@@ -146,11 +115,10 @@ struct MultigridSolver<Scalar>::Impl {
 
   int coarsest() const { return hierarchy.levelCount() - 1; }
 
-  /// A^{l+1} = Pᵀ A^l P, both products by column blocks on all threads.
+  /// A^{l+1} = Pᵀ A^l P on all threads.
   static Eigen::SparseMatrix<double> galerkin(const Eigen::SparseMatrix<double>& a,
                                               const Eigen::SparseMatrix<double>& p) {
-    const Eigen::SparseMatrix<double> pt = p.transpose();
-    return blockedProduct(pt, blockedProduct(a, p));
+    return galerkinProduct(a, p);
   }
 
   void refreshCounters() {
@@ -163,8 +131,8 @@ struct MultigridSolver<Scalar>::Impl {
   }
 
   /// Walks the levels once: A^0 = a0, then A^{l+1} = Pᵀ A^l P (diagonal-shifted for l > 0).
-  /// `symbolicPhase` builds the split and the CHOLMOD analyses from the patterns (conservative
-  /// sparse products never drop an entry, so the values do not change any pattern);
+  /// `symbolicPhase` builds the split and the CHOLMOD analyses from the patterns (Galerkin
+  /// products never drop an entry, so the values do not change any pattern);
   /// `numericPhase` fills stencils and boundary data and factorises. Both at once cost one
   /// chain of Galerkin products instead of two.
   void walkLevels(const Eigen::SparseMatrix<double>& a0, bool symbolicPhase, bool numericPhase) {

@@ -1,0 +1,14 @@
+// Solver module: the Galerkin coarse operator Pᵀ A P of paper §6.1 (A^{l+1} = Pᵀ A^l P).
+#pragma once
+
+#include <Eigen/SparseCore>
+
+namespace texgrad {
+
+/// Pᵀ A P for A (n x n) and P (n x m), column by column without forming A P. The
+/// pattern is structural (no entry is dropped for being zero), so it depends only on the
+/// patterns of A and P; the result does not depend on the thread count.
+Eigen::SparseMatrix<double> galerkinProduct(const Eigen::SparseMatrix<double>& a,
+                                            const Eigen::SparseMatrix<double>& p);
+
+}  // namespace texgrad

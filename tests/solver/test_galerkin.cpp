@@ -1,0 +1,56 @@
+// Galerkin products: equal to the reference sparse product, with a structural pattern.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "texgrad/solver/galerkin.h"
+
+using namespace texgrad;
+
+namespace {
+
+Eigen::SparseMatrix<double> randomSparse(int rows, int cols, int entries, std::mt19937& rng) {
+  std::uniform_real_distribution<double> value(-1.0, 1.0);
+  std::uniform_int_distribution<int> row(0, rows - 1), col(0, cols - 1);
+  std::vector<Eigen::Triplet<double>> t;
+  for (int k = 0; k < entries; ++k) t.emplace_back(row(rng), col(rng), value(rng));
+  Eigen::SparseMatrix<double> m(rows, cols);
+  m.setFromTriplets(t.begin(), t.end());
+  return m;
+}
+
+}  // namespace
+
+TEST(Galerkin, EqualsTheReferenceProduct) {
+  std::mt19937 rng(3);
+  // Enough coarse columns for several parallel tasks.
+  const Eigen::SparseMatrix<double> a = randomSparse(6000, 6000, 36000, rng);
+  const Eigen::SparseMatrix<double> p = randomSparse(6000, 5000, 15000, rng);
+  const Eigen::SparseMatrix<double> reference = Eigen::SparseMatrix<double>(p.transpose()) * a * p;
+  const Eigen::SparseMatrix<double> c = galerkinProduct(a, p);
+  ASSERT_EQ(c.rows(), 5000);
+  ASSERT_EQ(c.cols(), 5000);
+  const Eigen::SparseMatrix<double> difference = c - reference;
+  double largest = 0.0;
+  for (Eigen::Index k = 0; k < difference.nonZeros(); ++k)
+    largest = std::max(largest, std::abs(difference.valuePtr()[k]));
+  EXPECT_GT(reference.nonZeros(), 1000);
+  EXPECT_LT(largest, 1e-12);
+  EXPECT_TRUE(c.isCompressed());
+}
+
+TEST(Galerkin, KeepsStructuralZerosSoThePatternIgnoresValues) {
+  // A = [1 0; 0 1] with an explicitly stored zero at (0, 1) and (1, 0); P = I.
+  Eigen::SparseMatrix<double> a(2, 2);
+  a.insert(0, 0) = 1.0;
+  a.insert(1, 0) = 0.0;
+  a.insert(0, 1) = 0.0;
+  a.insert(1, 1) = 1.0;
+  a.makeCompressed();
+  Eigen::SparseMatrix<double> p(2, 2);
+  p.setIdentity();
+  const Eigen::SparseMatrix<double> c = galerkinProduct(a, p);
+  EXPECT_EQ(c.nonZeros(), 4);
+}
