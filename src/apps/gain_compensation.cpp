@@ -187,8 +187,7 @@ std::vector<ShadingSample> thinned(std::vector<ShadingSample> samples) {
 bool makeSample(int a, int b, const Eigen::Ref<const Eigen::RowVectorXd>& xa,
                 const Eigen::Ref<const Eigen::RowVectorXd>& xb,
                 const Eigen::Ref<const Eigen::RowVector3d>& na,
-                const Eigen::Ref<const Eigen::RowVector3d>& nb, int channels,
-                ShadingSample& s) {
+                const Eigen::Ref<const Eigen::RowVector3d>& nb, int channels, ShadingSample& s) {
   s.a = a;
   s.b = b;
   s.logRatio.setZero();
@@ -230,8 +229,8 @@ std::vector<ShadingSample> partialShadingSamples(const std::vector<Eigen::Matrix
     for (size_t b = a + 1; b < values.size(); ++b)
       for (Eigen::Index u = 0; u < values[a].rows(); ++u)
         if (confidence[a][u] > 0.0 && confidence[b][u] > 0.0 &&
-            makeSample(static_cast<int>(a), static_cast<int>(b), values[a].row(u),
-                       values[b].row(u), normals.row(u), normals.row(u), channels, s))
+            makeSample(static_cast<int>(a), static_cast<int>(b), values[a].row(u), values[b].row(u),
+                       normals.row(u), normals.row(u), channels, s))
           samples.push_back(s);
   return thinned(std::move(samples));
 }

@@ -5,11 +5,11 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <utility>
 #include <chrono>
 #include <cmath>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "texgrad/apps/texel_signal.h"
 #include "texgrad/core/error.h"

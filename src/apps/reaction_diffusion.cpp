@@ -4,10 +4,10 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <utility>
 #include <chrono>
 #include <cmath>
 #include <random>
+#include <utility>
 
 #include "texgrad/apps/texel_signal.h"
 #include "texgrad/core/error.h"

@@ -7,9 +7,9 @@
 #include "texgrad/apps/stitch.h"
 
 #include <array>
-#include <utility>
 #include <cmath>
 #include <map>
+#include <utility>
 
 #include "texgrad/apps/gain_compensation.h"
 #include "texgrad/apps/surface_normals.h"
@@ -154,8 +154,8 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
     if (options.compensateIllumination) {
       const Eigen::MatrixX3d normals = texelNormals(domain);
       illumination = solveLogIllumination(
-          sources, channels,
-          compositeShadingSamples(coupling, labels, xbar, normals, channels), texelsPerSource);
+          sources, channels, compositeShadingSamples(coupling, labels, xbar, normals, channels),
+          texelsPerSource);
       std::vector<std::vector<Eigen::Index>> rows(static_cast<size_t>(sources));
       for (Eigen::Index u = 0; u < xbar.rows(); ++u)
         if (labels[u] > 0) rows[static_cast<size_t>(labels[u] - 1)].push_back(u);
@@ -248,10 +248,10 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
         std::vector<Eigen::Index> seen;
         for (Eigen::Index u = 0; u < n; ++u)
           if (confidence[static_cast<size_t>(i)][u] > 0.0) seen.push_back(u);
-        gains.row(i) =
-            removeIllumination(illumination, i, normals, seen, colour, values[static_cast<size_t>(i)])
-                .array()
-                .exp();
+        gains.row(i) = removeIllumination(illumination, i, normals, seen, colour,
+                                          values[static_cast<size_t>(i)])
+                           .array()
+                           .exp();
       }
     } else {
       gains = solveLogGains(sources, colour, partialGainLinks(values, confidence, colour),

@@ -74,7 +74,8 @@ Eigen::MatrixX3d texelNormals(const TexelDomain& domain) {
   forEachCentre(domain, [&](int32_t u, int face, const Eigen::Vector3d& w) {
     const Triangle& t = mesh.triangles[static_cast<size_t>(face)];
     Eigen::Vector3d v = Eigen::Vector3d::Zero();
-    for (int k = 0; k < 3; ++k) v += w[k] * vertex[static_cast<size_t>(t[static_cast<size_t>(k)])].normalized();
+    for (int k = 0; k < 3; ++k)
+      v += w[k] * vertex[static_cast<size_t>(t[static_cast<size_t>(k)])].normalized();
     if (v.norm() > 0.0) {
       normals.row(u) = v.normalized().transpose();
       known[static_cast<size_t>(u)] = 1;

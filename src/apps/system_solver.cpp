@@ -7,8 +7,8 @@
 #include <tbb/task_arena.h>
 
 #include <chrono>
-#include <utility>
 #include <cmath>
+#include <utility>
 
 #include "texgrad/core/error.h"
 #include "texgrad/solver/cholmod_solver.h"

@@ -3,13 +3,13 @@
 // two colours (parallel, disjoint columns), seam pieces last: bit-identical for any thread count.
 #include "texgrad/operators/texel_operators.h"
 
-#include <Eigen/LU>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
+#include <Eigen/LU>
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 
 #include "texel_operators_impl.h"
 #include "texgrad/core/error.h"
@@ -172,8 +172,9 @@ void TexelOperators::Impl::buildPattern() {
     const int first = block * kBlock, last = std::min(n, first + kBlock);
     std::vector<int32_t>& out = blockInner[static_cast<size_t>(block)];
     out.reserve(static_cast<size_t>(last - first) * 9);
-    auto e = std::lower_bound(extra.begin(), extra.end(),
-                              std::pair<int32_t, int32_t>(first, std::numeric_limits<int32_t>::min()));
+    auto e =
+        std::lower_bound(extra.begin(), extra.end(),
+                         std::pair<int32_t, int32_t>(first, std::numeric_limits<int32_t>::min()));
     std::vector<int32_t> column;
     for (int u = first; u < last; ++u) {
       column.clear();

@@ -71,8 +71,8 @@ Sparse galerkinProduct(const Sparse& a, const Sparse& p) {
           s.fine.add(static_cast<int>(ai.row()), ai.value() * pi.value(), j);
       for (int r : s.fine.touched)  // (Pᵀ A P)_{:, j}
         for (RowMajor::InnerIterator pr(pRows, r); pr; ++pr)
-          s.coarse.add(static_cast<int>(pr.col()), pr.value() * s.fine.value[static_cast<size_t>(r)],
-                       j);
+          s.coarse.add(static_cast<int>(pr.col()),
+                       pr.value() * s.fine.value[static_cast<size_t>(r)], j);
       std::sort(s.coarse.touched.begin(), s.coarse.touched.end());
       block.count.push_back(static_cast<int>(s.coarse.touched.size()));
       for (int k : s.coarse.touched) {

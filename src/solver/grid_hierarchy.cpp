@@ -136,8 +136,8 @@ Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridL
   std::vector<int> start(static_cast<size_t>(n) + 1, 0);
   for (int u = 0; u < n; ++u) {
     const size_t su = static_cast<size_t>(u);
-    start[su + 1] = start[su] + parentsOf(fine.xOfUnknown[su]).count *
-                                    parentsOf(fine.yOfUnknown[su]).count;
+    start[su + 1] =
+        start[su] + parentsOf(fine.xOfUnknown[su]).count * parentsOf(fine.yOfUnknown[su]).count;
   }
   rows.resizeNonZeros(start.back());
   std::copy(start.begin(), start.end(), rows.outerIndexPtr());
@@ -153,7 +153,8 @@ Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridL
           const int64_t slot =
               box.slot(px.index[static_cast<size_t>(i)], py.index[static_cast<size_t>(j)]);
           rows.innerIndexPtr()[k] = coarse.unknownOfSlot[static_cast<size_t>(slot)];
-          rows.valuePtr()[k] = px.weight[static_cast<size_t>(i)] * py.weight[static_cast<size_t>(j)];
+          rows.valuePtr()[k] =
+              px.weight[static_cast<size_t>(i)] * py.weight[static_cast<size_t>(j)];
         }
     }
   });

@@ -13,9 +13,9 @@
 #include <ostream>
 #include <sstream>
 
-#include "texgrad/solver/galerkin.h"
 #include "solver/grid_kernels.h"
 #include "texgrad/core/error.h"
+#include "texgrad/solver/galerkin.h"
 
 namespace texgrad {
 namespace detail {

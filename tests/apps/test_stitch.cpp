@@ -140,9 +140,7 @@ TEST(GainCompensation, IlluminationFitRecoversGainAndShadingDespiteOutliers) {
   auto light = [&](int k, const Eigen::Vector3d& n) { return a[k] + b[k].dot(n); };
   std::mt19937 rng(7);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  auto unit = [&] {
-    return Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized();
-  };
+  auto unit = [&] { return Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized(); };
   std::vector<ShadingSample> samples;
   for (int i = 0; i < 3000; ++i) {
     ShadingSample s;

@@ -32,9 +32,9 @@ Eigen::MatrixXd solveLogGains(int sources, int channels, const std::vector<GainL
 /// Two sources' observations of (nearly) the same surface point, for the illumination model:
 /// log(x_a / x_b) per colour channel, and the surface normal where each was taken.
 struct ShadingSample {
-  int a = 0, b = 0;            ///< source indices, 0-based
-  Eigen::Vector3f na, nb;      ///< unit surface normals at the two observations
-  Eigen::Vector3f logRatio;    ///< per channel (first `channels` entries), log(x_a) - log(x_b)
+  int a = 0, b = 0;          ///< source indices, 0-based
+  Eigen::Vector3f na, nb;    ///< unit surface normals at the two observations
+  Eigen::Vector3f logRatio;  ///< per channel (first `channels` entries), log(x_a) - log(x_b)
 };
 
 /// Illumination per source beyond one gain: log x_k(p) = log t(p) + a_k + b_k . n(p), the
@@ -74,7 +74,8 @@ std::vector<ShadingSample> partialShadingSamples(const std::vector<Eigen::Matrix
 /// first `channels` channels of rows `rows` of values; returns the mean log illumination over
 /// those rows per channel (the log of the source's geometric-mean gain).
 Eigen::RowVectorXd removeIllumination(const Eigen::MatrixXd& illumination, int source,
-                        const Eigen::MatrixX3d& normals, const std::vector<Eigen::Index>& rows,
-                        int channels, Eigen::MatrixXd& values);
+                                      const Eigen::MatrixX3d& normals,
+                                      const std::vector<Eigen::Index>& rows, int channels,
+                                      Eigen::MatrixXd& values);
 
 }  // namespace texgrad
