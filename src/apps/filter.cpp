@@ -31,6 +31,8 @@ InteractiveFilter::InteractiveFilter(const TexelDomain& domain, const Image& tex
   options.validate();
   x0_ = gatherTexels(domain.grid(), working_);
   x_ = x0_;
+  symmetricProduct(domain.operators().mass(), x0_, massX0_);
+  symmetricProduct(domain.operators().stiffness(), x0_, stiffnessX0_);
   setParameters(options.alpha, options.beta, options.betaPerCell);
 }
 
@@ -42,15 +44,14 @@ void InteractiveFilter::setParameters(double alpha, double beta, std::vector<dou
     throw InvalidInputError("beta map has " + std::to_string(betaPerCell.size()) +
                             " cells, the grid has " +
                             std::to_string(domain_.grid().cellCoverage.size()));
-  // Products with the operators as they are (no scaled copy of S, hundreds of MB at 2048²), on
-  // all cores.
-  Eigen::MatrixXd stiffnessTerm;
-  symmetricProduct(ops.mass(), x0_, rhs_);
-  if (betaPerCell.empty())
-    symmetricProduct(ops.stiffness(), x0_, stiffnessTerm);
-  else
-    symmetricProduct(ops.modulatedStiffness(betaPerCell), x0_, stiffnessTerm);
-  rhs_ = alpha * rhs_ + (betaPerCell.empty() ? beta : 1.0) * stiffnessTerm;
+  // alpha M x0 + S_beta x0 from the stored products (no scaled copy of S, hundreds of MB at
+  // 2048²); a painted map needs its own S_beta.
+  if (betaPerCell.empty()) {
+    rhs_ = alpha * massX0_ + beta * stiffnessX0_;
+  } else {
+    symmetricProduct(ops.modulatedStiffness(betaPerCell), x0_, rhs_);
+    rhs_ += alpha * massX0_;
+  }
   // The system matrix depends on alpha only: painting beta changes just the right-hand side.
   if (alpha == alpha_) return;
   const bool first = alpha_ == 0.0;

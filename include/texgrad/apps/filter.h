@@ -74,6 +74,7 @@ class InteractiveFilter {
   bool normalMap_;
   double alpha_ = 0.0;  ///< alpha of the last numeric update (0: none yet)
   Eigen::MatrixXd x0_, x_, rhs_;
+  Eigen::MatrixXd massX0_, stiffnessX0_;  ///< M x0 and S x0: fixed, reused by every setParameters
   SystemSolver solver_;
 };
 
