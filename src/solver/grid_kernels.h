@@ -1,6 +1,7 @@
 // Solver module (private): allocation-free kernels of the V-cycle on slot-layout vectors (paper §6.2):
 // multi-colour Gauss–Seidel on 9-point stencils, residuals, boundary solves, bilinear transfers.
-// Vectors hold k interleaved channels per slot: value (slot, c) is at slot * k + c.
+// Vectors hold k channel planes of one value per slot: value (slot, c) is at c * slotCount + slot,
+// so a channel's rows are contiguous whatever the channel count.
 #pragma once
 
 #include <tbb/blocked_range.h>
@@ -8,130 +9,93 @@
 
 #include <Eigen/Core>
 #include <algorithm>
-#include <type_traits>
 #include <vector>
 
 #include "solver/level_system.h"
 
 namespace texgrad::detail {
 
-template <int N>
-using IntC = std::integral_constant<int, N>;
-
-/// Calls fn(K) with K the channel count as a compile-time constant for k <= 4, else K = 0 (the
-/// runtime k).
-template <typename Fn>
-void withChannels(int k, Fn&& fn) {
-  switch (k) {
-    case 1: fn(IntC<1>{}); return;
-    case 2: fn(IntC<2>{}); return;
-    case 3: fn(IntC<3>{}); return;
-    case 4: fn(IntC<4>{}); return;
-    default: fn(IntC<0>{}); return;
-  }
-}
-
 /// Rows per TBB task in grid loops (a row is a few hundred to a few thousand slots).
 constexpr size_t kRowGrain = 4;
 
 /// Sum of the 8 off-centre stencil terms at slot 2i of a colour run (fixed association order,
 /// so every channel count and thread count rounds alike). up / mid / down point at the run's
-/// first slot in the rows y - 1, y, y + 1; `st` is the channel stride.
+/// first slot in the rows y - 1, y, y + 1 of one channel plane.
 template <typename T>
-inline T offCentreSum(const T* w, int64_t n, int64_t i, const T* up, const T* mid, const T* down,
-                      int64_t st) {
-  const int64_t j = 2 * i * st;
-  return ((w[i] * up[j - st] + w[n + i] * up[j]) + (w[2 * n + i] * up[j + st] + w[3 * n + i] * mid[j - st])) +
-         ((w[5 * n + i] * mid[j + st] + w[6 * n + i] * down[j - st]) +
-          (w[7 * n + i] * down[j] + w[8 * n + i] * down[j + st]));
+inline T offCentreSum(const T* w, int64_t n, int64_t i, const T* up, const T* mid, const T* down) {
+  const int64_t j = 2 * i;
+  return ((w[i] * up[j - 1] + w[n + i] * up[j]) + (w[2 * n + i] * up[j + 1] + w[3 * n + i] * mid[j - 1])) +
+         ((w[5 * n + i] * mid[j + 1] + w[6 * n + i] * down[j - 1]) +
+          (w[7 * n + i] * down[j] + w[8 * n + i] * down[j + 1]));
 }
 
-/// Gauss–Seidel on one colour run, K channels per slot (stencil read once per slot):
+/// Gauss–Seidel on one colour run of one channel plane:
 /// x_s = (b_s - sum_{k != centre} w_k x_k) / w_centre where the mask plane is non-zero. `mid` and
 /// `x` alias the same row but touch disjoint slots (x the colour being relaxed, mid its
 /// neighbours of the other colour).
-template <typename T, int K>
+template <typename T>
 void relaxRun(int64_t n, const T* __restrict w, const T* __restrict b, const T* __restrict up,
               const T* __restrict mid, const T* __restrict down, T* __restrict x) {
   const T* inverse = w + kInverseDiagonal * n;
-  for (int64_t i = 0; i < n; ++i)
-    for (int c = 0; c < K; ++c) {
-      const int64_t j = 2 * i * K + c;
-      const T value = inverse[i] * (b[j] - offCentreSum(w, n, i, up + c, mid + c, down + c, K));
-      const T old = x[j];
-      x[j] = value + (inverse[i] == T(0) ? old : T(0));  // select by addition: vectorises
-    }
-}
-
-/// relaxRun on the run of colour q in `row` (channel count K, 0 = runtime k).
-template <typename T, int K>
-void relaxRowColour(const SlotRow& row, int q, const T* stencil, const T* b, T* x, int k) {
-  const int64_t n = row.runLength(q);
-  if (n <= 0) return;
-  const int64_t st = K > 0 ? K : k;
-  const int64_t s0 = (row.begin + q) * st, w = row.width * st;
-  const T* coeffs = stencil + row.coeffsOf(q);
-  if constexpr (K > 0) {
-    relaxRun<T, K>(n, coeffs, b + s0, x + s0 - w, x + s0, x + s0 + w, x + s0);
-  } else {
-    // Runtime channel count: same arithmetic, strided by k.
-    const T* inverse = coeffs + kInverseDiagonal * n;
-    for (int c = 0; c < k; ++c)
-      for (int64_t i = 0; i < n; ++i) {
-        const int64_t j = s0 + c + 2 * i * st;
-        const T value = inverse[i] * (b[j] - offCentreSum(coeffs, n, i, x + s0 - w + c,
-                                                          x + s0 + c, x + s0 + w + c, st));
-        if (inverse[i] != T(0)) x[j] = value;
-      }
+  for (int64_t i = 0; i < n; ++i) {
+    const int64_t j = 2 * i;
+    const T value = inverse[i] * (b[j] - offCentreSum(w, n, i, up, mid, down));
+    const T old = x[j];
+    x[j] = value + (inverse[i] == T(0) ? old : T(0));  // select by addition: vectorises
   }
 }
 
-/// r = b - A x on the slots of one colour run (one channel), 0 where the mask plane is 0.
-template <typename T, int K>
+/// relaxRun on the run of colour q in `row`, for each of the k channel planes of `plane` slots
+/// (channel c of slot s at c * plane + s); the run's stencils stay in cache across channels.
+template <typename T>
+void relaxRowColour(const SlotRow& row, int q, const T* stencil, const T* b, T* x, int k,
+                    int64_t plane) {
+  const int64_t n = row.runLength(q);
+  if (n <= 0) return;
+  const int64_t w = row.width;
+  const T* coeffs = stencil + row.coeffsOf(q);
+  for (int c = 0; c < k; ++c) {
+    const int64_t s0 = c * plane + row.begin + q;
+    relaxRun<T>(n, coeffs, b + s0, x + s0 - w, x + s0, x + s0 + w, x + s0);
+  }
+}
+
+/// r = b - A x on the slots of one colour run of one channel plane, 0 where the mask plane is 0.
+template <typename T>
 void residualRun(int64_t n, const T* __restrict w, const T* __restrict b, const T* __restrict up,
                  const T* __restrict mid, const T* __restrict down, T* __restrict r) {
   const T* inverse = w + kInverseDiagonal * n;
-  for (int64_t i = 0; i < n; ++i)
-    for (int c = 0; c < K; ++c) {
-      const int64_t j = 2 * i * K + c;
-      const T value = b[j] - (offCentreSum(w, n, i, up + c, mid + c, down + c, K) +
-                              w[4 * n + i] * mid[j]);
-      r[j] = inverse[i] == T(0) ? T(0) : value;
-    }
+  for (int64_t i = 0; i < n; ++i) {
+    const int64_t j = 2 * i;
+    const T value = b[j] - (offCentreSum(w, n, i, up, mid, down) + w[4 * n + i] * mid[j]);
+    r[j] = inverse[i] == T(0) ? T(0) : value;
+  }
 }
 
-/// r = b - A x on both colours of one run (channel count K, 0 = runtime k); 0 on masked slots.
-template <typename T, int K>
-void residualRow(const SlotRow& row, const T* stencil, const T* b, const T* x, T* r, int k) {
+/// r = b - A x on both colours of one run, every channel plane; 0 on masked slots.
+template <typename T>
+void residualRow(const SlotRow& row, const T* stencil, const T* b, const T* x, T* r, int k,
+                 int64_t plane) {
   for (int q = 0; q < 2; ++q) {
     const int64_t n = row.runLength(q);
     const T* w = stencil + row.coeffsOf(q);
-    if constexpr (K > 0) {
-      const int64_t s0 = (row.begin + q) * K, wd = row.width * K;
-      residualRun<T, K>(n, w, b + s0, x + s0 - wd, x + s0, x + s0 + wd, r + s0);
-    } else {
-      const int64_t s0 = (row.begin + q) * k, wd = int64_t(row.width) * k;
-      for (int c = 0; c < k; ++c)
-        for (int64_t m = 0; m < n; ++m) {
-          const int64_t j = s0 + c + 2 * m * k;
-          const T value = b[j] - (offCentreSum(w, n, m, x + s0 - wd + c, x + s0 + c,
-                                               x + s0 + wd + c, k) +
-                                  w[4 * n + m] * x[j]);
-          r[j] = w[kInverseDiagonal * n + m] == T(0) ? T(0) : value;
-        }
+    for (int c = 0; c < k; ++c) {
+      const int64_t s0 = c * plane + row.begin + q;
+      residualRun<T>(n, w, b + s0, x + s0 - row.width, x + s0, x + s0 + row.width, r + s0);
     }
   }
 }
 
 /// Relaxes box row i at half-sweep h (sweep h / 2, phase h % 2) if the row has that phase's y
 /// parity: colours (y, x) parity 00, 01, 10, 11 forward, the reverse backward.
-template <typename T, int K>
+template <typename T>
 void relaxNode(const LevelSystem& sys, int64_t i, int h, bool forward, const T* stencil,
                const T* b, T* x, int k) {
   const SlotRow& row = sys.boxRows[static_cast<size_t>(i)];
   if (row.begin == row.end || row.yParity != (forward ? (h & 1) : 1 - (h & 1))) return;
   for (int p = 0; p < 2; ++p)
-    relaxRowColour<T, K>(row, ((forward ? p : 1 - p) ^ row.xParity) & 1, stencil, b, x, k);
+    relaxRowColour<T>(row, ((forward ? p : 1 - p) ^ row.xParity) & 1, stencil, b, x, k,
+                      sys.slotCount());
 }
 
 /// The half-sweeps [0, halves) of a band that need no row of a neighbouring band: row i at
@@ -139,7 +103,7 @@ void relaxNode(const LevelSystem& sys, int64_t i, int h, bool forward, const T* 
 /// (a trapezoid). Rows advance as a wavefront, so the band's stencils are read once.
 /// With r, also the residual of every row whose neighbours are final within the trapezoid
 /// (row i once the wavefront has passed row i + 1), while its stencils are still in cache.
-template <typename T, int K>
+template <typename T>
 void relaxBandInterior(const LevelSystem& sys, const RowBand& band, int halves, bool forward,
                        const T* stencil, const T* b, T* x, T* r, int k) {
   const int64_t lo = band.first + (band.cutBelow ? halves : 0);
@@ -149,25 +113,26 @@ void relaxBandInterior(const LevelSystem& sys, const RowBand& band, int halves, 
       const int64_t i = step - h;
       if (i < band.first + (band.cutBelow ? h : 0) || i >= band.end - (band.cutAbove ? h : 0))
         continue;
-      relaxNode<T, K>(sys, i, h, forward, stencil, b, x, k);
+      relaxNode<T>(sys, i, h, forward, stencil, b, x, k);
     }
     const int64_t ready = step - halves;
     if (r && ready >= lo && ready < hi)
-      residualRow<T, K>(sys.boxRows[static_cast<size_t>(ready)], stencil, b, x, r, k);
+      residualRow<T>(sys.boxRows[static_cast<size_t>(ready)], stencil, b, x, r, k,
+                     sys.slotCount());
   }
 }
 
 /// The rest of the half-sweeps around the cut between two bands at box row m: rows
 /// [m - h, m + h) at half-sweep h, after both neighbouring trapezoids.
 /// With r, also the residual of rows [m - halves, m + halves), which the trapezoids left out.
-template <typename T, int K>
+template <typename T>
 void relaxBandSeam(const LevelSystem& sys, int64_t m, int halves, bool forward, const T* stencil,
                    const T* b, T* x, T* r, int k) {
   for (int h = 1; h < halves; ++h)
-    for (int64_t i = m - h; i < m + h; ++i) relaxNode<T, K>(sys, i, h, forward, stencil, b, x, k);
+    for (int64_t i = m - h; i < m + h; ++i) relaxNode<T>(sys, i, h, forward, stencil, b, x, k);
   if (r)
     for (int64_t i = m - halves; i < m + halves; ++i)
-      residualRow<T, K>(sys.boxRows[static_cast<size_t>(i)], stencil, b, x, r, k);
+      residualRow<T>(sys.boxRows[static_cast<size_t>(i)], stencil, b, x, r, k, sys.slotCount());
 }
 
 /// `sweeps` symmetric-ordered Gauss–Seidel sweeps over all interior slots with boundary values
@@ -175,37 +140,32 @@ void relaxBandSeam(const LevelSystem& sys, int64_t m, int halves, bool forward, 
 /// the seams between bands. Every row update sees the same neighbour values as in plain
 /// sweep-by-sweep order, so the result equals it bit for bit for any thread count. With r
 /// (not null), r = b - A x on the interior slots of every run afterwards, as interiorResidual.
+/// Slot vectors hold k channel planes of sys.slotCount() slots each.
 template <typename T>
 void relaxInterior(const LevelSystem& sys, const T* stencil, const T* b, T* x, int k, int sweeps,
                    bool forward, T* r = nullptr) {
   constexpr int kMaxSweepsPerPass = static_cast<int>((kBandRows - 2) / 4);
-  withChannels(k, [&](auto K) {
-    constexpr int Kc = decltype(K)::value;
-    for (int done = 0; done < sweeps; done += kMaxSweepsPerPass) {
-      const int halves = 2 * std::min(kMaxSweepsPerPass, sweeps - done);
-      T* residual = done + kMaxSweepsPerPass >= sweeps ? r : nullptr;  // last pass only
-      tbb::parallel_for(size_t(0), sys.bands.size(), [&](size_t i) {
-        relaxBandInterior<T, Kc>(sys, sys.bands[i], halves, forward, stencil, b, x, residual, k);
-      });
-      tbb::parallel_for(size_t(0), sys.bands.size(), [&](size_t i) {
-        if (sys.bands[i].cutBelow)
-          relaxBandSeam<T, Kc>(sys, sys.bands[i].first, halves, forward, stencil, b, x, residual,
-                               k);
-      });
-    }
-  });
+  for (int done = 0; done < sweeps; done += kMaxSweepsPerPass) {
+    const int halves = 2 * std::min(kMaxSweepsPerPass, sweeps - done);
+    T* residual = done + kMaxSweepsPerPass >= sweeps ? r : nullptr;  // last pass only
+    tbb::parallel_for(size_t(0), sys.bands.size(), [&](size_t i) {
+      relaxBandInterior<T>(sys, sys.bands[i], halves, forward, stencil, b, x, residual, k);
+    });
+    tbb::parallel_for(size_t(0), sys.bands.size(), [&](size_t i) {
+      if (sys.bands[i].cutBelow)
+        relaxBandSeam<T>(sys, sys.bands[i].first, halves, forward, stencil, b, x, residual, k);
+    });
+  }
 }
 
 /// r = b - A x on interior slots and r = 0 on the other slots of interior rows.
 template <typename T>
 void interiorResidual(const LevelSystem& sys, const T* stencil, const T* b, const T* x, T* r,
                       int k) {
-  withChannels(k, [&](auto K) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, sys.boxRows.size(), kRowGrain),
-                      [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t i = range.begin(); i != range.end(); ++i)
-        residualRow<T, decltype(K)::value>(sys.boxRows[i], stencil, b, x, r, k);
-    });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, sys.boxRows.size(), kRowGrain),
+                    [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i != range.end(); ++i)
+      residualRow<T>(sys.boxRows[i], stencil, b, x, r, k, sys.slotCount());
   });
 }
 
@@ -213,15 +173,18 @@ void interiorResidual(const LevelSystem& sys, const T* stencil, const T* b, cons
 template <typename T>
 void boundaryRowsResidual(const LevelSystem& sys, const SlotCsr& csr, const T* b, const T* x,
                           int k, Eigen::MatrixXd& out) {
+  const int64_t plane = sys.slotCount();
   out.resize(sys.boundaryCount(), k);
   tbb::parallel_for(tbb::blocked_range<int>(0, sys.boundaryCount(), 256),
                     [&](const tbb::blocked_range<int>& range) {
     for (int j = range.begin(); j != range.end(); ++j) {
       const int64_t s = sys.boundarySlots[static_cast<size_t>(j)];
+      const int64_t e0 = csr.ptr[static_cast<size_t>(j)], e1 = csr.ptr[static_cast<size_t>(j) + 1];
       for (int c = 0; c < k; ++c) {
-        double acc = static_cast<double>(b[s * k + c]);
-        for (int64_t e = csr.ptr[static_cast<size_t>(j)]; e < csr.ptr[static_cast<size_t>(j) + 1]; ++e)
-          acc -= csr.val[static_cast<size_t>(e)] * static_cast<double>(x[csr.col[static_cast<size_t>(e)] * k + c]);
+        const T* xc = x + c * plane;
+        double acc = static_cast<double>(b[c * plane + s]);
+        for (int64_t e = e0; e < e1; ++e)
+          acc -= csr.val[static_cast<size_t>(e)] * static_cast<double>(xc[csr.col[static_cast<size_t>(e)]]);
         out(j, c) = acc;
       }
     }
@@ -235,11 +198,12 @@ template <typename T>
 void solveBoundary(const LevelSystem& sys, const T* b, T* x, int k, Eigen::MatrixXd& work,
                    T* r = nullptr) {
   if (sys.boundaryCount() == 0) return;
+  const int64_t plane = sys.slotCount();
   boundaryRowsResidual(sys, sys.offBlock, b, x, k, work);
   sys.boundarySolver.solveInPlace(work);
-  for (int j = 0; j < sys.boundaryCount(); ++j)
-    for (int c = 0; c < k; ++c) {
-      T& xj = x[sys.boundarySlots[static_cast<size_t>(j)] * k + c];
+  for (int c = 0; c < k; ++c)
+    for (int j = 0; j < sys.boundaryCount(); ++j) {
+      T& xj = x[c * plane + sys.boundarySlots[static_cast<size_t>(j)]];
       const T updated = static_cast<T>(work(j, c));
       work(j, c) = static_cast<double>(updated) - static_cast<double>(xj);
       xj = updated;
@@ -253,7 +217,7 @@ void solveBoundary(const LevelSystem& sys, const T* b, T* x, int k, Eigen::Matri
         double acc = 0.0;
         for (int64_t e = fix.ptr[i]; e < fix.ptr[i + 1]; ++e)
           acc += fix.val[static_cast<size_t>(e)] * work(fix.col[static_cast<size_t>(e)], c);
-        r[sys.fixupSlots[i] * k + c] -= static_cast<T>(acc);
+        r[c * plane + sys.fixupSlots[i]] -= static_cast<T>(acc);
       }
   });
 }
@@ -262,8 +226,8 @@ void solveBoundary(const LevelSystem& sys, const T* b, T* x, int k, Eigen::Matri
 /// A_bi x_i + A_bb x_b = b_b hold up to rounding, so R.6 needs no pass over them.
 template <typename T>
 void clearBoundaryResidual(const LevelSystem& sys, T* r, int k) {
-  for (const int64_t s : sys.boundarySlots)
-    for (int c = 0; c < k; ++c) r[s * k + c] = T(0);
+  for (int c = 0; c < k; ++c)
+    for (const int64_t s : sys.boundarySlots) r[c * sys.slotCount() + s] = T(0);
 }
 
 /// r = b - A x on boundary slots (Fig. 8 R.6, before R^l).
@@ -272,9 +236,10 @@ void boundaryResidual(const LevelSystem& sys, const T* b, const T* x, T* r, int 
                       Eigen::MatrixXd& work) {
   if (sys.boundaryCount() == 0) return;
   boundaryRowsResidual(sys, sys.fullRows, b, x, k, work);
-  for (int j = 0; j < sys.boundaryCount(); ++j)
-    for (int c = 0; c < k; ++c)
-      r[sys.boundarySlots[static_cast<size_t>(j)] * k + c] = static_cast<T>(work(j, c));
+  for (int c = 0; c < k; ++c)
+    for (int j = 0; j < sys.boundaryCount(); ++j)
+      r[c * sys.slotCount() + sys.boundarySlots[static_cast<size_t>(j)]] =
+          static_cast<T>(work(j, c));
 }
 
 /// Complete residual r = b - A x on every slot (empty slots hold 0) (Fig. 8 R.6, before R^l).
@@ -304,23 +269,22 @@ inline T transferWeight(int f, int c) {
 /// floor(v / 2) for any sign of v.
 inline int floorHalf(int v) { return v >> 1; }
 
-/// Row pointer of lattice row y of box `box` (nullptr if the row lies outside the box), at the
-/// slot of lattice x = box.x0.
+/// Row pointer of lattice row y of box `box` in channel plane v (nullptr if the row lies outside
+/// the box), at the slot of lattice x = box.x0.
 template <typename T>
-inline T* boxRow(const GridBox& box, int y, T* v, int64_t k) {
+inline T* boxRow(const GridBox& box, int y, T* v) {
   if (y < box.y0 || y >= box.y0 + box.height) return nullptr;
-  return v + box.slot(box.x0, y) * k;
+  return v + box.slot(box.x0, y);
 }
 
-/// Restricts one coarse row: bc(x, y) = sum over fine (2x + i, 2y + j), |i|, |j| <= 1 inside the
-/// fine box, of w_i w_j r (bilinear weights 1, 1/2). Slots without an unknown get values that are
-/// never read.
-template <typename T, int K>
-void restrictRow(const GridBox& fb, const GridBox& cb, int y, const T* r, T* bc, int kRuntime) {
-  const int64_t k = K > 0 ? K : kRuntime;
-  const T* rows[3] = {boxRow(fb, 2 * y - 1, r, k), boxRow(fb, 2 * y, r, k), boxRow(fb, 2 * y + 1, r, k)};
+/// Restricts one coarse row of one channel plane: bc(x, y) = sum over fine (2x + i, 2y + j),
+/// |i|, |j| <= 1 inside the fine box, of w_i w_j r (bilinear weights 1, 1/2). Slots without an
+/// unknown get values that are never read.
+template <typename T>
+void restrictRow(const GridBox& fb, const GridBox& cb, int y, const T* r, T* bc) {
+  const T* rows[3] = {boxRow(fb, 2 * y - 1, r), boxRow(fb, 2 * y, r), boxRow(fb, 2 * y + 1, r)};
   const T wy[3] = {T(0.5), T(1), T(0.5)};
-  T* out = bc + cb.slot(cb.x0, y) * k;
+  T* out = bc + cb.slot(cb.x0, y);
   // Coarse columns whose three fine columns all lie in the fine box.
   const int lo = std::max(cb.x0, floorHalf(fb.x0 + 1) + ((fb.x0 + 1) & 1));
   const int hi = std::min(cb.x0 + cb.width - 1, floorHalf(fb.x0 + fb.width - 2));
@@ -328,92 +292,87 @@ void restrictRow(const GridBox& fb, const GridBox& cb, int y, const T* r, T* bc,
     const bool inside = x >= lo && x <= hi;
     if (inside && x == lo) {
       const int64_t n = hi - lo + 1;
-      for (int64_t c = 0; c < k; ++c) {
-        T* o = out + (lo - cb.x0) * k + c;
-        for (int64_t i = 0; i < n; ++i) o[i * k] = T(0);
-        for (int j = 0; j < 3; ++j) {
-          if (!rows[j]) continue;
-          const T* f = rows[j] + (2 * lo - fb.x0) * k + c;
-          const T wj = wy[j];
-          for (int64_t i = 0; i < n; ++i)
-            o[i * k] += wj * ((T(0.5) * f[(2 * i - 1) * k] + f[2 * i * k]) + T(0.5) * f[(2 * i + 1) * k]);
-        }
+      T* o = out + (lo - cb.x0);
+      for (int64_t i = 0; i < n; ++i) o[i] = T(0);
+      for (int j = 0; j < 3; ++j) {
+        if (!rows[j]) continue;
+        const T* f = rows[j] + (2 * lo - fb.x0);
+        const T wj = wy[j];
+        for (int64_t i = 0; i < n; ++i)
+          o[i] += wj * ((T(0.5) * f[2 * i - 1] + f[2 * i]) + T(0.5) * f[2 * i + 1]);
       }
       x = hi;
       continue;
     }
-    for (int64_t c = 0; c < k; ++c) out[(x - cb.x0) * k + c] = T(0);
+    out[x - cb.x0] = T(0);
     for (int j = 0; j < 3; ++j) {
       if (!rows[j]) continue;
       for (int fx = 2 * x - 1; fx <= 2 * x + 1; ++fx) {
         if (fx < fb.x0 || fx >= fb.x0 + fb.width) continue;
-        const T wgt = wy[j] * transferWeight<T>(fx, x);
-        for (int64_t c = 0; c < k; ++c) out[(x - cb.x0) * k + c] += wgt * rows[j][(fx - fb.x0) * k + c];
+        out[x - cb.x0] += wy[j] * transferWeight<T>(fx, x) * rows[j][fx - fb.x0];
       }
     }
   }
 }
 
-/// b^{l+1} = Pᵀ r^l on every coarse slot (Fig. 8 R.6); values at slots without an unknown are
-/// never read.
+/// b^{l+1} = Pᵀ r^l on every coarse slot of each of the k channel planes (Fig. 8 R.6); values at
+/// slots without an unknown are never read.
 template <typename T>
 void restrictResidual(const GridLevel& fine, const GridLevel& coarse,
                       const std::vector<BoxRow>& coarseRows, const T* r, T* bc, int k) {
-  withChannels(k, [&](auto K) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, coarseRows.size(), kRowGrain),
-                      [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t i = range.begin(); i != range.end(); ++i) {
-        const GridBox& cb = coarse.boxes[static_cast<size_t>(coarseRows[i].box)];
-        const GridBox& fb = fine.boxes[static_cast<size_t>(fine.boxOfChart[static_cast<size_t>(cb.chart)])];
-        restrictRow<T, decltype(K)::value>(fb, cb, coarseRows[i].y, r, bc, k);
-      }
-    });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, coarseRows.size(), kRowGrain),
+                    [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      const GridBox& cb = coarse.boxes[static_cast<size_t>(coarseRows[i].box)];
+      const GridBox& fb = fine.boxes[static_cast<size_t>(fine.boxOfChart[static_cast<size_t>(cb.chart)])];
+      for (int c = 0; c < k; ++c)
+        restrictRow<T>(fb, cb, coarseRows[i].y, r + c * fine.slotCount,
+                       bc + c * coarse.slotCount);
+    }
   });
 }
 
-/// Adds the bilinear interpolation of one or two coarse rows to one fine row on slots whose
-/// kind is not Empty: xf(x) += wy (c(x / 2)) for even x, wy (c(x / 2) + c(x / 2 + 1)) / 2 for odd x.
-template <typename T, int K>
+/// Adds the bilinear interpolation of one or two coarse rows to one fine row of one channel plane
+/// on slots whose kind is not Empty: xf(x) += wy (c(x / 2)) for even x,
+/// wy (c(x / 2) + c(x / 2 + 1)) / 2 for odd x.
+template <typename T>
 void prolongRow(const GridBox& fb, const GridBox& cb, int y, const SlotKind* kind, const T* xc,
-                T* xf, int kRuntime) {
-  const int64_t k = K > 0 ? K : kRuntime;
-  const T* c0 = xc + cb.slot(cb.x0, y >> 1) * k;
-  const T* c1 = xc + cb.slot(cb.x0, (y + 1) >> 1) * k;
+                T* xf) {
+  const T* c0 = xc + cb.slot(cb.x0, y >> 1);
+  const T* c1 = xc + cb.slot(cb.x0, (y + 1) >> 1);
   const bool odd = y & 1;
   const int64_t s0 = fb.slot(fb.x0, y);
   const SlotKind* kd = kind + s0;
-  T* out = xf + s0 * k;
+  T* out = xf + s0;
   // Fine x = 2 m + parity with coarse index m - cb.x0 (and m + 1 - cb.x0 for odd x).
   for (int parity = 0; parity < 2; ++parity) {
     int x = fb.x0 + ((fb.x0 & 1) != parity ? 1 : 0);
     const int64_t n = (fb.x0 + fb.width - x + 1) / 2;
     const int64_t m0 = (x >> 1) - cb.x0, f0 = x - fb.x0;
-    for (int64_t c = 0; c < k; ++c) {
-      for (int64_t i = 0; i < n; ++i) {
-        const int64_t m = (m0 + i) * k + c;
-        const T h0 = parity ? T(0.5) * (c0[m] + c0[m + k]) : c0[m];
-        const T h1 = parity ? T(0.5) * (c1[m] + c1[m + k]) : c1[m];
-        const T v = odd ? T(0.5) * (h0 + h1) : h0;
-        const int64_t f = (f0 + 2 * i) * k + c;
-        out[f] += kd[f0 + 2 * i] != SlotKind::Empty ? v : T(0);
-      }
+    for (int64_t i = 0; i < n; ++i) {
+      const int64_t m = m0 + i;
+      const T h0 = parity ? T(0.5) * (c0[m] + c0[m + 1]) : c0[m];
+      const T h1 = parity ? T(0.5) * (c1[m] + c1[m + 1]) : c1[m];
+      const T v = odd ? T(0.5) * (h0 + h1) : h0;
+      const int64_t f = f0 + 2 * i;
+      out[f] += kd[f] != SlotKind::Empty ? v : T(0);
     }
   }
 }
 
-/// x^l += P x^{l+1} on every non-empty fine slot (Fig. 8 P.2).
+/// x^l += P x^{l+1} on every non-empty fine slot of each of the k channel planes (Fig. 8 P.2).
 template <typename T>
 void prolongCorrection(const GridLevel& fine, const GridLevel& coarse, const SlotKind* fineKind,
                        const std::vector<BoxRow>& fineRows, const T* xc, T* xf, int k) {
-  withChannels(k, [&](auto K) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, fineRows.size(), kRowGrain),
-                      [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t i = range.begin(); i != range.end(); ++i) {
-        const GridBox& fb = fine.boxes[static_cast<size_t>(fineRows[i].box)];
-        const GridBox& cb = coarse.boxes[static_cast<size_t>(coarse.boxOfChart[static_cast<size_t>(fb.chart)])];
-        prolongRow<T, decltype(K)::value>(fb, cb, fineRows[i].y, fineKind, xc, xf, k);
-      }
-    });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, fineRows.size(), kRowGrain),
+                    [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t i = range.begin(); i != range.end(); ++i) {
+      const GridBox& fb = fine.boxes[static_cast<size_t>(fineRows[i].box)];
+      const GridBox& cb = coarse.boxes[static_cast<size_t>(coarse.boxOfChart[static_cast<size_t>(fb.chart)])];
+      for (int c = 0; c < k; ++c)
+        prolongRow<T>(fb, cb, fineRows[i].y, fineKind, xc + c * coarse.slotCount,
+                      xf + c * fine.slotCount);
+    }
   });
 }
 

@@ -73,6 +73,8 @@ struct LevelSystem {
   std::vector<int64_t> fixupSlots;         ///< interior slots with a boundary neighbour
   CholmodSolver boundarySolver;            ///< factorisation of A_bb^l
   int interiorCount() const { return static_cast<int>(interiorUnknowns.size()); }
+  /// Slots of the level: the length of one channel plane of a slot vector.
+  int64_t slotCount() const { return static_cast<int64_t>(kind.size()); }
   int boundaryCount() const { return static_cast<int>(boundarySlots.size()); }
 };
 

@@ -2,6 +2,7 @@
 // with CHOLMOD for boundary blocks and the coarsest level.
 #include "texgrad/solver/multigrid_solver.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
@@ -224,22 +225,27 @@ struct MultigridSolver<Scalar>::Impl {
   template <typename Src>
   void scatter(const Src& m, std::vector<T>& dst) {
     const GridLevel& g = hierarchy.level(0);
-    const int k = channels;
-    tbb::parallel_for(0, g.unknownCount(), [&](int u) {
-      const int64_t s = g.slotOfUnknown[static_cast<size_t>(u)];
-      for (int c = 0; c < k; ++c) dst[static_cast<size_t>(s * k + c)] = static_cast<T>(m(u, c));
-    });
+    for (int c = 0; c < channels; ++c) {
+      T* plane = dst.data() + c * g.slotCount;
+      tbb::parallel_for(tbb::blocked_range<int>(0, g.unknownCount(), 4096),
+                        [&](const tbb::blocked_range<int>& range) {
+        for (int u = range.begin(); u != range.end(); ++u)
+          plane[g.slotOfUnknown[static_cast<size_t>(u)]] = static_cast<T>(m(u, c));
+      });
+    }
   }
 
   template <typename Dst>
   void gather(const std::vector<T>& src, Dst& m) {
     const GridLevel& g = hierarchy.level(0);
-    const int k = channels;
-    tbb::parallel_for(0, g.unknownCount(), [&](int u) {
-      const int64_t s = g.slotOfUnknown[static_cast<size_t>(u)];
-      for (int c = 0; c < k; ++c)
-        m(u, c) = static_cast<typename Dst::Scalar>(src[static_cast<size_t>(s * k + c)]);
-    });
+    for (int c = 0; c < channels; ++c) {
+      const T* plane = src.data() + c * g.slotCount;
+      tbb::parallel_for(tbb::blocked_range<int>(0, g.unknownCount(), 4096),
+                        [&](const tbb::blocked_range<int>& range) {
+        for (int u = range.begin(); u != range.end(); ++u)
+          m(u, c) = static_cast<typename Dst::Scalar>(plane[g.slotOfUnknown[static_cast<size_t>(u)]]);
+      });
+    }
   }
 
   /// Interior relaxation; with `residual`, also r = b - A x on interior slots (fused).
@@ -264,14 +270,14 @@ struct MultigridSolver<Scalar>::Impl {
     Level& lv = levels.back();
     const int k = channels;
     coarseWork.resize(g.unknownCount(), k);
-    for (int u = 0; u < g.unknownCount(); ++u)
-      for (int c = 0; c < k; ++c)
-        coarseWork(u, c) =
-            double(lv.b[static_cast<size_t>(g.slotOfUnknown[static_cast<size_t>(u)] * k + c)]);
+    for (int c = 0; c < k; ++c)
+      for (int u = 0; u < g.unknownCount(); ++u)
+        coarseWork(u, c) = double(lv.b[static_cast<size_t>(
+            c * g.slotCount + g.slotOfUnknown[static_cast<size_t>(u)])]);
     coarseSolver.solveInPlace(coarseWork);
-    for (int u = 0; u < g.unknownCount(); ++u)
-      for (int c = 0; c < k; ++c)
-        lv.x[static_cast<size_t>(g.slotOfUnknown[static_cast<size_t>(u)] * k + c)] =
+    for (int c = 0; c < k; ++c)
+      for (int u = 0; u < g.unknownCount(); ++u)
+        lv.x[static_cast<size_t>(c * g.slotCount + g.slotOfUnknown[static_cast<size_t>(u)])] =
             static_cast<T>(coarseWork(u, c));
     times.coarse += secondsSince(start);
   }
