@@ -15,6 +15,14 @@
 
 namespace texgrad::detail {
 
+/// The hot row kernels are compiled twice, for x86-64-v3 (AVX2 + FMA: 8 floats per vector) and
+/// the baseline, and the loader picks the one the CPU runs (GCC/Clang function multiversioning).
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(__SANITIZE_ADDRESS__)
+#define TEXGRAD_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define TEXGRAD_SIMD_CLONES
+#endif
+
 /// Rows per TBB task in grid loops (a row is a few hundred to a few thousand slots).
 constexpr size_t kRowGrain = 4;
 
@@ -34,7 +42,7 @@ inline T offCentreSum(const T* w, int64_t n, int64_t i, const T* up, const T* mi
 /// `x` alias the same row but touch disjoint slots (x the colour being relaxed, mid its
 /// neighbours of the other colour).
 template <typename T>
-void relaxRun(int64_t n, const T* __restrict w, const T* __restrict b, const T* __restrict up,
+TEXGRAD_SIMD_CLONES void relaxRun(int64_t n, const T* __restrict w, const T* __restrict b, const T* __restrict up,
               const T* __restrict mid, const T* __restrict down, T* __restrict x) {
   const T* inverse = w + kInverseDiagonal * n;
   for (int64_t i = 0; i < n; ++i) {
@@ -62,7 +70,7 @@ void relaxRowColour(const SlotRow& row, int q, const T* stencil, const T* b, T* 
 
 /// r = b - A x on the slots of one colour run of one channel plane, 0 where the mask plane is 0.
 template <typename T>
-void residualRun(int64_t n, const T* __restrict w, const T* __restrict b, const T* __restrict up,
+TEXGRAD_SIMD_CLONES void residualRun(int64_t n, const T* __restrict w, const T* __restrict b, const T* __restrict up,
                  const T* __restrict mid, const T* __restrict down, T* __restrict r) {
   const T* inverse = w + kInverseDiagonal * n;
   for (int64_t i = 0; i < n; ++i) {
@@ -201,13 +209,16 @@ void solveBoundary(const LevelSystem& sys, const T* b, T* x, int k, Eigen::Matri
   const int64_t plane = sys.slotCount();
   boundaryRowsResidual(sys, sys.offBlock, b, x, k, work);
   sys.boundarySolver.solveInPlace(work);
-  for (int c = 0; c < k; ++c)
-    for (int j = 0; j < sys.boundaryCount(); ++j) {
-      T& xj = x[c * plane + sys.boundarySlots[static_cast<size_t>(j)]];
-      const T updated = static_cast<T>(work(j, c));
-      work(j, c) = static_cast<double>(updated) - static_cast<double>(xj);
-      xj = updated;
-    }
+  tbb::parallel_for(tbb::blocked_range<int>(0, sys.boundaryCount(), 4096),
+                    [&](const tbb::blocked_range<int>& range) {
+    for (int c = 0; c < k; ++c)
+      for (int j = range.begin(); j != range.end(); ++j) {
+        T& xj = x[c * plane + sys.boundarySlots[static_cast<size_t>(j)]];
+        const T updated = static_cast<T>(work(j, c));
+        work(j, c) = static_cast<double>(updated) - static_cast<double>(xj);
+        xj = updated;
+      }
+  });
   if (!r) return;
   const SlotCsr& fix = sys.interiorNextToBoundary;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, sys.fixupSlots.size(), 1024),
@@ -281,7 +292,7 @@ inline T* boxRow(const GridBox& box, int y, T* v) {
 /// |i|, |j| <= 1 inside the fine box, of w_i w_j r (bilinear weights 1, 1/2). Slots without an
 /// unknown get values that are never read.
 template <typename T>
-void restrictRow(const GridBox& fb, const GridBox& cb, int y, const T* r, T* bc) {
+TEXGRAD_SIMD_CLONES void restrictRow(const GridBox& fb, const GridBox& cb, int y, const T* r, T* bc) {
   const T* rows[3] = {boxRow(fb, 2 * y - 1, r), boxRow(fb, 2 * y, r), boxRow(fb, 2 * y + 1, r)};
   const T wy[3] = {T(0.5), T(1), T(0.5)};
   T* out = bc + cb.slot(cb.x0, y);
@@ -336,7 +347,7 @@ void restrictResidual(const GridLevel& fine, const GridLevel& coarse,
 /// on slots whose kind is not Empty: xf(x) += wy (c(x / 2)) for even x,
 /// wy (c(x / 2) + c(x / 2 + 1)) / 2 for odd x.
 template <typename T>
-void prolongRow(const GridBox& fb, const GridBox& cb, int y, const SlotKind* kind, const T* xc,
+TEXGRAD_SIMD_CLONES void prolongRow(const GridBox& fb, const GridBox& cb, int y, const SlotKind* kind, const T* xc,
                 T* xf) {
   const T* c0 = xc + cb.slot(cb.x0, y >> 1);
   const T* c1 = xc + cb.slot(cb.x0, (y + 1) >> 1);

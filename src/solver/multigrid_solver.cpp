@@ -225,27 +225,29 @@ struct MultigridSolver<Scalar>::Impl {
   template <typename Src>
   void scatter(const Src& m, std::vector<T>& dst) {
     const GridLevel& g = hierarchy.level(0);
-    for (int c = 0; c < channels; ++c) {
-      T* plane = dst.data() + c * g.slotCount;
-      tbb::parallel_for(tbb::blocked_range<int>(0, g.unknownCount(), 4096),
-                        [&](const tbb::blocked_range<int>& range) {
-        for (int u = range.begin(); u != range.end(); ++u)
-          plane[g.slotOfUnknown[static_cast<size_t>(u)]] = static_cast<T>(m(u, c));
-      });
-    }
+    const int64_t plane = g.slotCount;
+    const int k = channels;
+    tbb::parallel_for(tbb::blocked_range<int>(0, g.unknownCount(), 4096),
+                      [&](const tbb::blocked_range<int>& range) {
+      for (int u = range.begin(); u != range.end(); ++u) {
+        T* slot = dst.data() + g.slotOfUnknown[static_cast<size_t>(u)];
+        for (int c = 0; c < k; ++c) slot[c * plane] = static_cast<T>(m(u, c));
+      }
+    });
   }
 
   template <typename Dst>
   void gather(const std::vector<T>& src, Dst& m) {
     const GridLevel& g = hierarchy.level(0);
-    for (int c = 0; c < channels; ++c) {
-      const T* plane = src.data() + c * g.slotCount;
-      tbb::parallel_for(tbb::blocked_range<int>(0, g.unknownCount(), 4096),
-                        [&](const tbb::blocked_range<int>& range) {
-        for (int u = range.begin(); u != range.end(); ++u)
-          m(u, c) = static_cast<typename Dst::Scalar>(plane[g.slotOfUnknown[static_cast<size_t>(u)]]);
-      });
-    }
+    const int64_t plane = g.slotCount;
+    const int k = channels;
+    tbb::parallel_for(tbb::blocked_range<int>(0, g.unknownCount(), 4096),
+                      [&](const tbb::blocked_range<int>& range) {
+      for (int u = range.begin(); u != range.end(); ++u) {
+        const T* slot = src.data() + g.slotOfUnknown[static_cast<size_t>(u)];
+        for (int c = 0; c < k; ++c) m(u, c) = static_cast<typename Dst::Scalar>(slot[c * plane]);
+      }
+    });
   }
 
   /// Interior relaxation; with `residual`, also r = b - A x on interior slots (fused).
