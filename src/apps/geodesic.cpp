@@ -548,12 +548,12 @@ void GeodesicSolver::requireSources() const {
 void GeodesicSolver::diffusionStep(bool full) {
   const auto start = Clock::now();
   diffusionReport_ =
-      full ? diffusionSolver_.solve(impulse_, u_) : diffusionSolver_.step(impulse_, u_);
+      full ? diffusionSolver_.solve(impulse_, u_) : diffusionSolver_.refine(impulse_, u_);
   if (dirichletSolver_) {
     if (full)
       dirichletSolver_->solve(impulseDirichlet_, uDirichlet_);
     else
-      dirichletSolver_->step(impulseDirichlet_, uDirichlet_);
+      dirichletSolver_->refine(impulseDirichlet_, uDirichlet_);
     heat_ = 0.5 * (u_ + uDirichlet_);
   } else {
     heat_ = u_;

@@ -313,6 +313,20 @@ SolveReport SystemSolver::step(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
   return impl_->run(b, x, 1);
 }
 
+SolveReport SystemSolver::refine(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
+  Impl& m = *impl_;
+  if (!m.multigridFloat || m.settings.kind != SolverKind::Multigrid) return step(b, x);
+  if (x.rows() != b.rows() || x.cols() != b.cols()) x = Eigen::MatrixXd::Zero(b.rows(), b.cols());
+  const auto start = std::chrono::steady_clock::now();
+  SolveReport report;
+  m.arena.execute([&] { report.residuals.push_back(m.multigridFloat->refine(b, x)); });
+  m.cacheValid = false;  // x moved without the refinement residual
+  report.iterations = 1;
+  report.converged = m.settings.tolerance > 0 && report.residuals.back() <= m.settings.tolerance;
+  report.times.other = secondsSince(start);
+  return report;
+}
+
 std::string SystemSolver::summary() const {
   if (impl_->settings.kind == SolverKind::Direct)
     return "direct solver (CHOLMOD), " + std::to_string(impl_->grid.unknownCount()) + " unknowns";

@@ -1,7 +1,7 @@
-// Solver module (private): allocation-free kernels of the V-cycle on slot-layout vectors (paper §6.2):
-// multi-colour Gauss–Seidel on 9-point stencils, residuals, boundary solves, bilinear transfers.
-// Vectors hold k channel planes of one value per slot: value (slot, c) is at c * slotCount + slot,
-// so a channel's rows are contiguous whatever the channel count.
+// Solver module (private): allocation-free kernels of the V-cycle on slot-layout vectors (paper
+// §6.2): multi-colour Gauss–Seidel on 9-point stencils, residuals, boundary solves, bilinear
+// transfers. Vectors hold k channel planes of one value per slot: value (slot, c) is at
+// c * slotCount + slot, so a channel's rows are contiguous whatever the channel count.
 #pragma once
 
 #include <tbb/blocked_range.h>
@@ -17,7 +17,8 @@ namespace texgrad::detail {
 
 /// The hot row kernels are compiled twice, for x86-64-v3 (AVX2 + FMA: 8 floats per vector) and
 /// the baseline, and the loader picks the one the CPU runs (GCC/Clang function multiversioning).
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(__SANITIZE_ADDRESS__)
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && \
+    !defined(__SANITIZE_ADDRESS__)
 #define TEXGRAD_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define TEXGRAD_SIMD_CLONES
@@ -32,7 +33,8 @@ constexpr size_t kRowGrain = 4;
 template <typename T>
 inline T offCentreSum(const T* w, int64_t n, int64_t i, const T* up, const T* mid, const T* down) {
   const int64_t j = 2 * i;
-  return ((w[i] * up[j - 1] + w[n + i] * up[j]) + (w[2 * n + i] * up[j + 1] + w[3 * n + i] * mid[j - 1])) +
+  return ((w[i] * up[j - 1] + w[n + i] * up[j]) +
+          (w[2 * n + i] * up[j + 1] + w[3 * n + i] * mid[j - 1])) +
          ((w[5 * n + i] * mid[j + 1] + w[6 * n + i] * down[j - 1]) +
           (w[7 * n + i] * down[j] + w[8 * n + i] * down[j + 1]));
 }
@@ -42,8 +44,9 @@ inline T offCentreSum(const T* w, int64_t n, int64_t i, const T* up, const T* mi
 /// `x` alias the same row but touch disjoint slots (x the colour being relaxed, mid its
 /// neighbours of the other colour).
 template <typename T>
-TEXGRAD_SIMD_CLONES void relaxRun(int64_t n, const T* __restrict w, const T* __restrict b, const T* __restrict up,
-              const T* __restrict mid, const T* __restrict down, T* __restrict x) {
+TEXGRAD_SIMD_CLONES void relaxRun(int64_t n, const T* __restrict w, const T* __restrict b,
+                                  const T* __restrict up, const T* __restrict mid,
+                                  const T* __restrict down, T* __restrict x) {
   const T* inverse = w + kInverseDiagonal * n;
   for (int64_t i = 0; i < n; ++i) {
     const int64_t j = 2 * i;
@@ -70,8 +73,9 @@ void relaxRowColour(const SlotRow& row, int q, const T* stencil, const T* b, T* 
 
 /// r = b - A x on the slots of one colour run of one channel plane, 0 where the mask plane is 0.
 template <typename T>
-TEXGRAD_SIMD_CLONES void residualRun(int64_t n, const T* __restrict w, const T* __restrict b, const T* __restrict up,
-                 const T* __restrict mid, const T* __restrict down, T* __restrict r) {
+TEXGRAD_SIMD_CLONES void residualRun(int64_t n, const T* __restrict w, const T* __restrict b,
+                                     const T* __restrict up, const T* __restrict mid,
+                                     const T* __restrict down, T* __restrict r) {
   const T* inverse = w + kInverseDiagonal * n;
   for (int64_t i = 0; i < n; ++i) {
     const int64_t j = 2 * i;
@@ -97,8 +101,8 @@ void residualRow(const SlotRow& row, const T* stencil, const T* b, const T* x, T
 /// Relaxes box row i at half-sweep h (sweep h / 2, phase h % 2) if the row has that phase's y
 /// parity: colours (y, x) parity 00, 01, 10, 11 forward, the reverse backward.
 template <typename T>
-void relaxNode(const LevelSystem& sys, int64_t i, int h, bool forward, const T* stencil,
-               const T* b, T* x, int k) {
+void relaxNode(const LevelSystem& sys, int64_t i, int h, bool forward, const T* stencil, const T* b,
+               T* x, int k) {
   const SlotRow& row = sys.boxRows[static_cast<size_t>(i)];
   if (row.begin == row.end || row.yParity != (forward ? (h & 1) : 1 - (h & 1))) return;
   for (int p = 0; p < 2; ++p)
@@ -125,8 +129,7 @@ void relaxBandInterior(const LevelSystem& sys, const RowBand& band, int halves, 
     }
     const int64_t ready = step - halves;
     if (r && ready >= lo && ready < hi)
-      residualRow<T>(sys.boxRows[static_cast<size_t>(ready)], stencil, b, x, r, k,
-                     sys.slotCount());
+      residualRow<T>(sys.boxRows[static_cast<size_t>(ready)], stencil, b, x, r, k, sys.slotCount());
   }
 }
 
@@ -172,31 +175,33 @@ void interiorResidual(const LevelSystem& sys, const T* stencil, const T* b, cons
                       int k) {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, sys.boxRows.size(), kRowGrain),
                     [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i != range.end(); ++i)
-      residualRow<T>(sys.boxRows[i], stencil, b, x, r, k, sys.slotCount());
-  });
+                      for (size_t i = range.begin(); i != range.end(); ++i)
+                        residualRow<T>(sys.boxRows[i], stencil, b, x, r, k, sys.slotCount());
+                    });
 }
 
 /// Accumulates, per boundary row j and channel c, out(j, c) = b - sum over csr row j of A x.
 template <typename T>
-void boundaryRowsResidual(const LevelSystem& sys, const SlotCsr& csr, const T* b, const T* x,
-                          int k, Eigen::MatrixXd& out) {
+void boundaryRowsResidual(const LevelSystem& sys, const SlotCsr& csr, const T* b, const T* x, int k,
+                          Eigen::MatrixXd& out) {
   const int64_t plane = sys.slotCount();
   out.resize(sys.boundaryCount(), k);
   tbb::parallel_for(tbb::blocked_range<int>(0, sys.boundaryCount(), 256),
                     [&](const tbb::blocked_range<int>& range) {
-    for (int j = range.begin(); j != range.end(); ++j) {
-      const int64_t s = sys.boundarySlots[static_cast<size_t>(j)];
-      const int64_t e0 = csr.ptr[static_cast<size_t>(j)], e1 = csr.ptr[static_cast<size_t>(j) + 1];
-      for (int c = 0; c < k; ++c) {
-        const T* xc = x + c * plane;
-        double acc = static_cast<double>(b[c * plane + s]);
-        for (int64_t e = e0; e < e1; ++e)
-          acc -= csr.val[static_cast<size_t>(e)] * static_cast<double>(xc[csr.col[static_cast<size_t>(e)]]);
-        out(j, c) = acc;
-      }
-    }
-  });
+                      for (int j = range.begin(); j != range.end(); ++j) {
+                        const int64_t s = sys.boundarySlots[static_cast<size_t>(j)];
+                        const int64_t e0 = csr.ptr[static_cast<size_t>(j)],
+                                      e1 = csr.ptr[static_cast<size_t>(j) + 1];
+                        for (int c = 0; c < k; ++c) {
+                          const T* xc = x + c * plane;
+                          double acc = static_cast<double>(b[c * plane + s]);
+                          for (int64_t e = e0; e < e1; ++e)
+                            acc -= csr.val[static_cast<size_t>(e)] *
+                                   static_cast<double>(xc[csr.col[static_cast<size_t>(e)]]);
+                          out(j, c) = acc;
+                        }
+                      }
+                    });
 }
 
 /// Boundary direct solve with interior locked (Fig. 8 R.4–R.5 / P.3–P.4), in double precision.
@@ -211,26 +216,27 @@ void solveBoundary(const LevelSystem& sys, const T* b, T* x, int k, Eigen::Matri
   sys.boundarySolver.solveInPlace(work);
   tbb::parallel_for(tbb::blocked_range<int>(0, sys.boundaryCount(), 4096),
                     [&](const tbb::blocked_range<int>& range) {
-    for (int c = 0; c < k; ++c)
-      for (int j = range.begin(); j != range.end(); ++j) {
-        T& xj = x[c * plane + sys.boundarySlots[static_cast<size_t>(j)]];
-        const T updated = static_cast<T>(work(j, c));
-        work(j, c) = static_cast<double>(updated) - static_cast<double>(xj);
-        xj = updated;
-      }
-  });
+                      for (int c = 0; c < k; ++c)
+                        for (int j = range.begin(); j != range.end(); ++j) {
+                          T& xj = x[c * plane + sys.boundarySlots[static_cast<size_t>(j)]];
+                          const T updated = static_cast<T>(work(j, c));
+                          work(j, c) = static_cast<double>(updated) - static_cast<double>(xj);
+                          xj = updated;
+                        }
+                    });
   if (!r) return;
   const SlotCsr& fix = sys.interiorNextToBoundary;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, sys.fixupSlots.size(), 1024),
                     [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i != range.end(); ++i)
-      for (int c = 0; c < k; ++c) {
-        double acc = 0.0;
-        for (int64_t e = fix.ptr[i]; e < fix.ptr[i + 1]; ++e)
-          acc += fix.val[static_cast<size_t>(e)] * work(fix.col[static_cast<size_t>(e)], c);
-        r[c * plane + sys.fixupSlots[i]] -= static_cast<T>(acc);
-      }
-  });
+                      for (size_t i = range.begin(); i != range.end(); ++i)
+                        for (int c = 0; c < k; ++c) {
+                          double acc = 0.0;
+                          for (int64_t e = fix.ptr[i]; e < fix.ptr[i + 1]; ++e)
+                            acc += fix.val[static_cast<size_t>(e)] *
+                                   work(fix.col[static_cast<size_t>(e)], c);
+                          r[c * plane + sys.fixupSlots[i]] -= static_cast<T>(acc);
+                        }
+                    });
 }
 
 /// r = 0 on boundary slots: right after the boundary solve (Fig. 8 R.5) the boundary rows
@@ -278,7 +284,9 @@ inline T transferWeight(int f, int c) {
 }
 
 /// floor(v / 2) for any sign of v.
-inline int floorHalf(int v) { return v >> 1; }
+inline int floorHalf(int v) {
+  return v >> 1;
+}
 
 /// Row pointer of lattice row y of box `box` in channel plane v (nullptr if the row lies outside
 /// the box), at the slot of lattice x = box.x0.
@@ -292,7 +300,8 @@ inline T* boxRow(const GridBox& box, int y, T* v) {
 /// |i|, |j| <= 1 inside the fine box, of w_i w_j r (bilinear weights 1, 1/2). Slots without an
 /// unknown get values that are never read.
 template <typename T>
-TEXGRAD_SIMD_CLONES void restrictRow(const GridBox& fb, const GridBox& cb, int y, const T* r, T* bc) {
+TEXGRAD_SIMD_CLONES void restrictRow(const GridBox& fb, const GridBox& cb, int y, const T* r,
+                                     T* bc) {
   const T* rows[3] = {boxRow(fb, 2 * y - 1, r), boxRow(fb, 2 * y, r), boxRow(fb, 2 * y + 1, r)};
   const T wy[3] = {T(0.5), T(1), T(0.5)};
   T* out = bc + cb.slot(cb.x0, y);
@@ -331,24 +340,26 @@ TEXGRAD_SIMD_CLONES void restrictRow(const GridBox& fb, const GridBox& cb, int y
 template <typename T>
 void restrictResidual(const GridLevel& fine, const GridLevel& coarse,
                       const std::vector<BoxRow>& coarseRows, const T* r, T* bc, int k) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, coarseRows.size(), kRowGrain),
-                    [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i != range.end(); ++i) {
-      const GridBox& cb = coarse.boxes[static_cast<size_t>(coarseRows[i].box)];
-      const GridBox& fb = fine.boxes[static_cast<size_t>(fine.boxOfChart[static_cast<size_t>(cb.chart)])];
-      for (int c = 0; c < k; ++c)
-        restrictRow<T>(fb, cb, coarseRows[i].y, r + c * fine.slotCount,
-                       bc + c * coarse.slotCount);
-    }
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, coarseRows.size(), kRowGrain),
+      [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+          const GridBox& cb = coarse.boxes[static_cast<size_t>(coarseRows[i].box)];
+          const GridBox& fb =
+              fine.boxes[static_cast<size_t>(fine.boxOfChart[static_cast<size_t>(cb.chart)])];
+          for (int c = 0; c < k; ++c)
+            restrictRow<T>(fb, cb, coarseRows[i].y, r + c * fine.slotCount,
+                           bc + c * coarse.slotCount);
+        }
+      });
 }
 
 /// Adds the bilinear interpolation of one or two coarse rows to one fine row of one channel plane
 /// on slots whose kind is not Empty: xf(x) += wy (c(x / 2)) for even x,
 /// wy (c(x / 2) + c(x / 2 + 1)) / 2 for odd x.
 template <typename T>
-TEXGRAD_SIMD_CLONES void prolongRow(const GridBox& fb, const GridBox& cb, int y, const SlotKind* kind, const T* xc,
-                T* xf) {
+TEXGRAD_SIMD_CLONES void prolongRow(const GridBox& fb, const GridBox& cb, int y,
+                                    const SlotKind* kind, const T* xc, T* xf) {
   const T* c0 = xc + cb.slot(cb.x0, y >> 1);
   const T* c1 = xc + cb.slot(cb.x0, (y + 1) >> 1);
   const bool odd = y & 1;
@@ -375,16 +386,18 @@ TEXGRAD_SIMD_CLONES void prolongRow(const GridBox& fb, const GridBox& cb, int y,
 template <typename T>
 void prolongCorrection(const GridLevel& fine, const GridLevel& coarse, const SlotKind* fineKind,
                        const std::vector<BoxRow>& fineRows, const T* xc, T* xf, int k) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, fineRows.size(), kRowGrain),
-                    [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t i = range.begin(); i != range.end(); ++i) {
-      const GridBox& fb = fine.boxes[static_cast<size_t>(fineRows[i].box)];
-      const GridBox& cb = coarse.boxes[static_cast<size_t>(coarse.boxOfChart[static_cast<size_t>(fb.chart)])];
-      for (int c = 0; c < k; ++c)
-        prolongRow<T>(fb, cb, fineRows[i].y, fineKind, xc + c * coarse.slotCount,
-                      xf + c * fine.slotCount);
-    }
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, fineRows.size(), kRowGrain),
+      [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t i = range.begin(); i != range.end(); ++i) {
+          const GridBox& fb = fine.boxes[static_cast<size_t>(fineRows[i].box)];
+          const GridBox& cb =
+              coarse.boxes[static_cast<size_t>(coarse.boxOfChart[static_cast<size_t>(fb.chart)])];
+          for (int c = 0; c < k; ++c)
+            prolongRow<T>(fb, cb, fineRows[i].y, fineKind, xc + c * coarse.slotCount,
+                          xf + c * fine.slotCount);
+        }
+      });
 }
 
 }  // namespace texgrad::detail

@@ -229,11 +229,11 @@ struct MultigridSolver<Scalar>::Impl {
     const int k = channels;
     tbb::parallel_for(tbb::blocked_range<int>(0, g.unknownCount(), 4096),
                       [&](const tbb::blocked_range<int>& range) {
-      for (int u = range.begin(); u != range.end(); ++u) {
-        T* slot = dst.data() + g.slotOfUnknown[static_cast<size_t>(u)];
-        for (int c = 0; c < k; ++c) slot[c * plane] = static_cast<T>(m(u, c));
-      }
-    });
+                        for (int u = range.begin(); u != range.end(); ++u) {
+                          T* slot = dst.data() + g.slotOfUnknown[static_cast<size_t>(u)];
+                          for (int c = 0; c < k; ++c) slot[c * plane] = static_cast<T>(m(u, c));
+                        }
+                      });
   }
 
   template <typename Dst>
@@ -243,11 +243,12 @@ struct MultigridSolver<Scalar>::Impl {
     const int k = channels;
     tbb::parallel_for(tbb::blocked_range<int>(0, g.unknownCount(), 4096),
                       [&](const tbb::blocked_range<int>& range) {
-      for (int u = range.begin(); u != range.end(); ++u) {
-        const T* slot = src.data() + g.slotOfUnknown[static_cast<size_t>(u)];
-        for (int c = 0; c < k; ++c) m(u, c) = static_cast<typename Dst::Scalar>(slot[c * plane]);
-      }
-    });
+                        for (int u = range.begin(); u != range.end(); ++u) {
+                          const T* slot = src.data() + g.slotOfUnknown[static_cast<size_t>(u)];
+                          for (int c = 0; c < k; ++c)
+                            m(u, c) = static_cast<typename Dst::Scalar>(slot[c * plane]);
+                        }
+                      });
   }
 
   /// Interior relaxation; with `residual`, also r = b - A x on interior slots (fused).
@@ -274,8 +275,8 @@ struct MultigridSolver<Scalar>::Impl {
     coarseWork.resize(g.unknownCount(), k);
     for (int c = 0; c < k; ++c)
       for (int u = 0; u < g.unknownCount(); ++u)
-        coarseWork(u, c) = double(lv.b[static_cast<size_t>(
-            c * g.slotCount + g.slotOfUnknown[static_cast<size_t>(u)])]);
+        coarseWork(u, c) = double(
+            lv.b[static_cast<size_t>(c * g.slotCount + g.slotOfUnknown[static_cast<size_t>(u)])]);
     coarseSolver.solveInPlace(coarseWork);
     for (int c = 0; c < k; ++c)
       for (int u = 0; u < g.unknownCount(); ++u)
@@ -284,8 +285,9 @@ struct MultigridSolver<Scalar>::Impl {
     times.coarse += secondsSince(start);
   }
 
-  /// Fig. 8 on the slot vectors; level 0 holds b and the current x.
-  void vCycle() {
+  /// Fig. 8 on the slot vectors; level 0 holds b and the current x. With `withResidual`, level
+  /// 0's r ends as b - A x for the new x (fused into the last relaxation).
+  void vCycle(bool withResidual = false) {
     const int L = coarsest();
     for (int l = 0; l < L; ++l) {
       Level& lv = levels[static_cast<size_t>(l)];
@@ -308,8 +310,14 @@ struct MultigridSolver<Scalar>::Impl {
                                 lv.x.data(),
                                 channels);  // P.2
       times.transfer += secondsSince(start);
-      boundary(lv);      // P.3–P.4
-      relax(lv, false);  // P.5–P.6, mirrored colour order
+      boundary(lv);                              // P.3–P.4
+      relax(lv, false, withResidual && l == 0);  // P.5–P.6, mirrored colour order
+    }
+    if (withResidual) {  // the interior residual came with the last sweeps; boundary rows now
+      Level& lv = levels.front();
+      const auto start = Clock::now();
+      detail::boundaryResidual(lv.sys, lv.b.data(), lv.x.data(), lv.r.data(), channels, lv.work);
+      times.other += secondsSince(start);
     }
   }
 
@@ -438,6 +446,31 @@ SolveReport MultigridSolver<Scalar>::solve(const Matrix& b, Matrix& x,
     report.times.other = after.other - before.other;
   });
   return report;
+}
+
+template <typename Scalar>
+double MultigridSolver<Scalar>::refine(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
+  const int n = impl_->hierarchy.levelCount() > 0 ? impl_->hierarchy.level(0).unknownCount() : 0;
+  if (b.rows() != n || x.rows() != n || x.cols() != b.cols())
+    throw InvalidInputError("MultigridSolver::refine: b and x must both be " + std::to_string(n) +
+                            " x k");
+  double relative = 0.0;
+  impl_->arena.execute([&] {
+    Impl& m = *impl_;
+    m.ensureChannels(static_cast<int>(b.cols()));
+    const double before = m.times.total();
+    const auto start = Clock::now();
+    auto& level0 = m.levels.front();
+    m.scatter(b, level0.b);
+    m.scatter(x, level0.x);
+    m.vCycle(true);
+    m.gather(level0.x, x);
+    const double bNorm = std::sqrt(sumOfSquares(level0.b.data(), level0.b.size()));
+    const double rNorm = std::sqrt(sumOfSquares(level0.r.data(), level0.r.size()));
+    relative = bNorm > 0.0 ? rNorm / bNorm : 0.0;
+    m.times.other += secondsSince(start) - (m.times.total() - before);
+  });
+  return relative;
 }
 
 template <typename Scalar>

@@ -31,13 +31,17 @@ export async function run() {
     const { page, errors } = opened;
     const size = page.viewportSize();
     const click = { x: Math.round(size.width * 0.5), y: Math.round(size.height * 0.5) };
-    const source = await page.evaluate(([x, y]) => window.texgrad.pick(x, y), [click.x, click.y]);
-    check(source !== null, "the model is under the centre of the view");
+    const aimed = await page.evaluate(([x, y]) => window.texgrad.pick(x, y), [click.x, click.y]);
+    check(aimed !== null, "the model is under the centre of the view");
     const framesBefore = await page.evaluate(() => window.texgrad.stats.frames);
     await page.mouse.click(click.x, click.y);
     await page.waitForFunction((n) => window.texgrad.stats.frames >= n + 10, framesBefore,
                                { timeout: 60000 });
     check(true, "the page received 10 texture updates after the click");
+    // The source is the surface point the page picked at the click (the layout may have moved
+    // since `aimed`, e.g. when the first frame arrived).
+    const source = await page.evaluate(() => window.texgrad.stats.lastSource);
+    check(source && source.face >= 0, `the click set a source (face ${source && source.face})`);
     const state = await waitForState(page, (s) => !s.running && s.iteration > 0, 90000);
     console.log(`  server: ${state.iteration} steps, residual ${state.residual.toExponential(2)}, ` +
                 `${state.updatesPerSecond.toFixed(1)} updates/s`);
@@ -66,7 +70,8 @@ export async function run() {
     // Screenshot: the source pixel shows the colour of distance 0 (red), far pixels do not.
     await page.waitForTimeout(300);
     await page.screenshot({ path: join(outDir, "viewer-geodesic.png") });
-    const at = await canvasPixel(page, click.x, click.y + 2);
+    const shown = await page.evaluate((s) => window.texgrad.project(s.face, s.bary), source);
+    const at = await canvasPixel(page, shown.x, shown.y + 2);
     check(at[0] > 1.5 * at[2] && at[0] > 100, `pixel at the source is red (rgba ${at})`);
     let far = null, farDistance = -1;
     for (let i = 0; i < samples.length; ++i) {

@@ -171,6 +171,38 @@ TEST(Multigrid, ManyChannelsMatchOneAtATime) {
   }
 }
 
+TEST(Multigrid, RefineIsOneCycleAndReportsTheTrueResidual) {
+  // refine(b, x) on double blocks does what cycle does, and its residual (fused into the last
+  // sweeps) is ||b - A x|| / ||b|| of the new x as a sparse product computes it.
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  const Eigen::SparseMatrix<double> a = p.system(1e2);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 3, 7);
+  MultigridSolver<double> mg;
+  mg.initAndUpdate(p.grid, a);
+  Eigen::MatrixXd viaCycle = Eigen::MatrixXd::Zero(a.rows(), 3), viaRefine = viaCycle;
+  double previous = 1.0;
+  for (int k = 0; k < 4; ++k) {
+    mg.cycle(b, viaCycle);
+    const double reported = mg.refine(b, viaRefine);
+    EXPECT_EQ((viaCycle - viaRefine).cwiseAbs().maxCoeff(), 0.0);
+    const double truth = (b - a * viaRefine).norm() / b.norm();
+    EXPECT_NEAR(reported, truth, 1e-9 * truth);
+    EXPECT_LT(reported, 0.5 * previous);
+    previous = reported;
+  }
+  // Float cycles: the same residual up to float rounding.
+  MultigridSolver<float> single;
+  single.initAndUpdate(p.grid, a);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 3);
+  for (int k = 0; k < 3; ++k) {
+    const double reported = single.refine(b, x);
+    const double truth = (b - a * x).norm() / b.norm();
+    EXPECT_NEAR(reported, truth, 1e-3 * truth + 1e-6);
+  }
+  Eigen::MatrixXd wrong = Eigen::MatrixXd::Zero(a.rows() + 1, 3);
+  EXPECT_THROW(single.refine(b, wrong), InvalidInputError);
+}
+
 TEST(Multigrid, SummaryListsLevels) {
   const test::SyntheticProblem p = test::multiChartProblem(16);
   MultigridSolver<float> mg;

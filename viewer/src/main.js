@@ -121,7 +121,7 @@ async function main() {
   // the next animation frame. The scene is rendered only when something changed (a frame, the
   // camera, the size), so an idle page leaves the CPU to the solver.
   const stats = { frames: 0, shown: 0, frameTimes: [], shownTimes: [], last: null,
-                  serverState: null };
+                  serverState: null, lastSource: null };
   let latest = null, renderWanted = true;
   const requestRender = () => { renderWanted = true; };
   const recent = (times, now) => {
@@ -231,7 +231,10 @@ async function main() {
     } else if (info.app === "geodesic" && down && event.button === 0 &&
                Math.hypot(event.clientX - down.x, event.clientY - down.y) < 4) {
       const hit = pick(event.clientX, event.clientY);
-      if (hit) connection.request({ type: "source", ...hit, add: event.shiftKey });
+      if (hit) {
+        stats.lastSource = hit;
+        connection.request({ type: "source", ...hit, add: event.shiftKey });
+      }
     }
     down = null;
   });

@@ -130,7 +130,10 @@ class GeodesicSolver {
   void setSource(const GeodesicSource& source);
 
   /// Interactive refinement (paper Sec. 7.3): one V-cycle on A1 u = b, then one on A2 y = div
-  /// with the divergence of the current u. With the direct solver both solves are exact.
+  /// with the divergence of the current u. With the direct solver both solves are exact. With
+  /// float cycles, the heat's cycle keeps its iterate in float (SystemSolver::refine: its
+  /// right-hand side never changes), and the distance's cycle corrects with a double residual
+  /// (SystemSolver::step: the singular Neumann system would stall at float rounding).
   void update();
   /// Full solves: settings.cycles V-cycles (or CG / direct) on A1, then on A2.
   void solve();
