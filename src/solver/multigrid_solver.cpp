@@ -313,10 +313,14 @@ struct MultigridSolver<Scalar>::Impl {
       boundary(lv);                              // P.3–P.4
       relax(lv, false, withResidual && l == 0);  // P.5–P.6, mirrored colour order
     }
-    if (withResidual) {  // the interior residual came with the last sweeps; boundary rows now
+    if (withResidual) {  // interior rows came with the last sweeps (if level 0 was relaxed)
       Level& lv = levels.front();
       const auto start = Clock::now();
-      detail::boundaryResidual(lv.sys, lv.b.data(), lv.x.data(), lv.r.data(), channels, lv.work);
+      if (L > 0)
+        detail::boundaryResidual(lv.sys, lv.b.data(), lv.x.data(), lv.r.data(), channels, lv.work);
+      else
+        detail::levelResidual(lv.sys, lv.stencil.data(), lv.b.data(), lv.x.data(), lv.r.data(),
+                              channels, lv.work);
       times.other += secondsSince(start);
     }
   }

@@ -244,4 +244,9 @@ TEST(Multigrid, CoarsestOnlyProblemIsSolvedDirectly) {
   Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 2);
   const SolveReport r = mg.solve(b, x, {1, 0.0});
   EXPECT_LT(r.residuals.back(), 1e-12);
+  // refine after solve (whose residual left values in the workspace) reports the new residual.
+  x.setZero();
+  mg.solve(b, x, {0, 0.0});
+  EXPECT_LT(mg.refine(b, x), 1e-12);
+  EXPECT_LT((b - a * x).norm(), 1e-12 * b.norm());
 }

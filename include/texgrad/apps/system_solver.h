@@ -62,7 +62,8 @@ class SystemSolver {
   SolveReport step(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
   /// As step, but float multigrid cycles x without the double-precision residual of step
   /// (faster: no sparse product in double; accuracy stops improving near float rounding). For
-  /// frame-by-frame display. The report holds the relative residual of the new x only.
+  /// frame-by-frame display. The report holds the relative residual of the new x only. Other
+  /// kinds and double cycles: step.
   SolveReport refine(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
   /// Multigrid hierarchy summary, or a one-line description for the direct solver.
   std::string summary() const;

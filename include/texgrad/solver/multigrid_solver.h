@@ -79,9 +79,9 @@ class MultigridSolver {
   /// V-cycles from the initial guess x until control is met; residual and change per cycle.
   SolveReport solve(const Matrix& b, Matrix& x, const SolveControl& control);
   /// One V-cycle on x in place for right-hand side b, both given in double and converted to
-  /// the cycle precision and back (no double-precision residual, unlike refinement: float
-  /// cycles stop improving near float rounding). Returns ||b - A x|| / ||b|| for the new x,
-  /// computed in the cycle precision while the last relaxation sweeps (0 if b = 0).
+  /// the cycle precision and back (float cycles thus stop improving near float rounding).
+  /// Returns ||b - A x|| / ||b|| for the new x in the cycle precision, fused into the last
+  /// relaxation sweeps (0 if b = 0).
   double refine(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
   /// Preconditioner application z = V(r): one V-cycle from z = 0 (double in, double out).
   void precondition(const Eigen::MatrixXd& r, Eigen::MatrixXd& z) const;
