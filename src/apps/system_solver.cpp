@@ -320,7 +320,6 @@ SolveReport SystemSolver::refine(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
   const auto start = std::chrono::steady_clock::now();
   SolveReport report;
   m.arena.execute([&] { report.residuals.push_back(m.multigridFloat->refine(b, x)); });
-  m.cacheValid = false;  // x moved without the refinement residual
   report.iterations = 1;
   report.converged = m.settings.tolerance > 0 && report.residuals.back() <= m.settings.tolerance;
   report.times.other = secondsSince(start);
