@@ -3,6 +3,7 @@
 // (sources are snapped onto M in geodesic_source.cpp).
 #include "texgrad/apps/geodesic.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <Eigen/LU>
@@ -31,6 +32,8 @@ double secondsSince(Clock::time_point start) {
 /// Faces per parallel task when building gradient samples (fixed: results do not depend on
 /// threads).
 constexpr int kFacesPerTask = 64;
+/// Unknowns per task in per-unknown loops.
+constexpr Eigen::Index kUnknownsPerTask = 1 << 14;
 /// NearField offset: annulus of chord distances around a source, in texel sizes of its face.
 constexpr double kNearFieldInner = 2.0;
 constexpr double kNearFieldOuter = 4.0;
@@ -84,10 +87,11 @@ void GeodesicOptions::validate() const {
 /// centroid). div_h(omega)_t = sum_q weight_q dphi_t(q) . X_q with X_q = g^-1 omega_q.
 struct GeodesicSolver::Gradients {
   /// Piece with exactly bilinear basis: four cell texels, centroid in cell-local coordinates.
-  /// Compact (32 bytes: the divergence streams every sample once per update); the metric
-  /// comes from the face.
+  /// Compact (the divergence streams every sample once per update); the metric comes from the
+  /// face.
   struct CellSample {
     std::array<int32_t, 4> texels;  ///< order (a,b), (a+1,b), (a,b+1), (a+1,b+1); -1 if absent
+    int32_t cellX;                  ///< a
     float fx, fy;                   ///< centroid, cell-local
     float area;                     ///< area in texel units
     int32_t face;                   ///< index into faceMetrics
@@ -102,7 +106,7 @@ struct GeodesicSolver::Gradients {
     double weight, hxx, hxy, hyy;
   };
 
-  std::vector<CellSample> cells;  ///< sorted by cell row
+  std::vector<CellSample> cells;  ///< sorted by cell row, then cell column (stable)
   std::vector<FaceMetric> faceMetrics;
   std::vector<int64_t> rowBegin;  ///< cells of row b: [rowBegin[b + 1], rowBegin[b + 2]), b >= -1
   std::vector<SeamSample> seams;
@@ -119,6 +123,9 @@ struct GeodesicSolver::Gradients {
   void build(const TexelDomain& domain);
   /// Adds div_h(-du/|du|) of the function with coefficients u to div (one-point quadrature).
   void divergence(const double* u, double* div);
+  /// The cell-sample part of divergence for the samples [first, last) of one cell row.
+  static void addRowDivergence(const CellSample* first, const CellSample* last,
+                               const FaceMetric* metrics, const double* u, double* div);
 };
 
 void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
@@ -162,7 +169,7 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
           if (!(area > 0.0)) continue;
           centroid /= 3.0 * area;
           area *= 0.5;
-          chunk.cells.push_back({basis.cellTexels(piece.cellX, piece.cellY),
+          chunk.cells.push_back({basis.cellTexels(piece.cellX, piece.cellY), piece.cellX,
                                  static_cast<float>(centroid.x()), static_cast<float>(centroid.y()),
                                  static_cast<float>(area), f});
           chunk.cellRows.push_back(piece.cellY);
@@ -222,17 +229,72 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
     seamGradients.insert(seamGradients.end(), chunk.gradients.begin(), chunk.gradients.end());
     chunk = Chunk();
   }
+  tbb::parallel_for(size_t(0), rowBegin.size() - 1, [&](size_t row) {
+    std::stable_sort(cells.begin() + rowBegin[row], cells.begin() + rowBegin[row + 1],
+                     [](const CellSample& a, const CellSample& b) { return a.cellX < b.cellX; });
+  });
+}
+
+namespace {
+
+/// X = -g^-1 du / |du|_{g^-1} (unit in g) times `weight`: the direction of steepest descent of
+/// u; zero where du = 0.
+inline Eigen::Vector2d descentDirection(double gx, double gy, double hxx, double hxy, double hyy,
+                                        double weight) {
+  const double zx = hxx * gx + hxy * gy, zy = hxy * gx + hyy * gy;
+  const double norm2 = gx * zx + gy * zy;
+  if (!(norm2 > 0.0) || !std::isfinite(norm2)) return Eigen::Vector2d(0.0, 0.0);
+  const double s = -weight / std::sqrt(norm2);
+  return Eigen::Vector2d(s * zx, s * zy);
+}
+
+}  // namespace
+
+void GeodesicSolver::Gradients::addRowDivergence(const CellSample* first, const CellSample* last,
+                                                 const FaceMetric* metrics, const double* u,
+                                                 double* div) {
+  // The samples of one cell row come by column, so the sums for the two texel columns of the
+  // current cell stay in registers and each texel is written once per row: adding every sample
+  // straight into div chains each addition behind the previous sample's store to that texel.
+  std::array<int32_t, 4> texels{-1, -1, -1, -1};  // of the current cell
+  std::array<double, 4> sum{};                    // same order as texels
+  int32_t column = std::numeric_limits<int32_t>::min();
+  auto flush = [&](int k) {
+    if (texels[k] >= 0) div[texels[k]] += sum[k];
+  };
+  for (const CellSample* s = first; s != last; ++s) {
+    if (s->cellX != column) {
+      const bool next = s->cellX == column + 1;
+      flush(0);
+      flush(2);
+      if (!next) {
+        flush(1);
+        flush(3);
+      }
+      sum = {next ? sum[1] : 0.0, 0.0, next ? sum[3] : 0.0, 0.0};
+      texels = s->texels;
+      column = s->cellX;
+    }
+    std::array<double, 4> v{};
+    for (int k = 0; k < 4; ++k) v[k] = texels[k] >= 0 ? u[texels[k]] : 0.0;
+    const double fx = s->fx, fy = s->fy;
+    const double gx = (1 - fy) * (v[1] - v[0]) + fy * (v[3] - v[2]);
+    const double gy = (1 - fx) * (v[2] - v[0]) + fx * (v[3] - v[1]);
+    const FaceMetric& m = metrics[s->face];
+    const double zx = m.hxx * gx + m.hxy * gy, zy = m.hxy * gx + m.hyy * gy;
+    const double norm2 = gx * zx + gy * zy;
+    const bool ok = (norm2 > 0.0) & (norm2 <= std::numeric_limits<double>::max());
+    const double scale = (ok ? -(s->area * m.root) : 0.0) / std::sqrt(ok ? norm2 : 1.0);
+    const double xx = scale * zx, xy = scale * zy;
+    sum[0] += -(1 - fy) * xx - (1 - fx) * xy;
+    sum[1] += (1 - fy) * xx - fx * xy;
+    sum[2] += -fy * xx + (1 - fx) * xy;
+    sum[3] += fy * xx + fx * xy;
+  }
+  for (int k = 0; k < 4; ++k) flush(k);
 }
 
 void GeodesicSolver::Gradients::divergence(const double* u, double* div) {
-  // X = -g^-1 du / |du|_{g^-1}: unit (in g) direction of steepest descent of u; zero where du = 0.
-  auto direction = [](double gx, double gy, double hxx, double hxy, double hyy, double weight) {
-    const double zx = hxx * gx + hxy * gy, zy = hxy * gx + hyy * gy;
-    const double norm2 = gx * zx + gy * zy;
-    if (!(norm2 > 0.0) || !std::isfinite(norm2)) return Eigen::Vector2d(0.0, 0.0);
-    const double s = -weight / std::sqrt(norm2);
-    return Eigen::Vector2d(s * zx, s * zy);
-  };
   arena.execute([&] {
     const int rows = static_cast<int>(rowBegin.size()) - 1;  // cell rows -1 .. ny - 1
     // Cell rows b and b + 2 touch disjoint texel rows, so each colour runs its rows in parallel;
@@ -240,21 +302,8 @@ void GeodesicSolver::Gradients::divergence(const double* u, double* div) {
     for (int colour = 0; colour < 2; ++colour) {
       tbb::parallel_for(0, (rows + 1 - colour) / 2, [&](int half) {
         const size_t slot = static_cast<size_t>(2 * half + colour);
-        for (int64_t i = rowBegin[slot]; i < rowBegin[slot + 1]; ++i) {
-          const CellSample& s = cells[static_cast<size_t>(i)];
-          std::array<double, 4> v{};
-          for (int k = 0; k < 4; ++k) v[k] = s.texels[k] >= 0 ? u[s.texels[k]] : 0.0;
-          const double fx = s.fx, fy = s.fy;
-          const double gx = (1 - fy) * (v[1] - v[0]) + fy * (v[3] - v[2]);
-          const double gy = (1 - fx) * (v[2] - v[0]) + fx * (v[3] - v[1]);
-          const FaceMetric& m = faceMetrics[static_cast<size_t>(s.face)];
-          const Eigen::Vector2d x = direction(gx, gy, m.hxx, m.hxy, m.hyy, s.area * m.root);
-          const std::array<double, 4> c{-(1 - fy) * x.x() - (1 - fx) * x.y(),
-                                        (1 - fy) * x.x() - fx * x.y(),
-                                        -fy * x.x() + (1 - fx) * x.y(), fy * x.x() + fx * x.y()};
-          for (int k = 0; k < 4; ++k)
-            if (s.texels[k] >= 0) div[s.texels[k]] += c[k];
-        }
+        addRowDivergence(cells.data() + rowBegin[slot], cells.data() + rowBegin[slot + 1],
+                         faceMetrics.data(), u, div);
       });
     }
   });
@@ -265,7 +314,7 @@ void GeodesicSolver::Gradients::divergence(const double* u, double* div) {
       const SeamSample& s = seams[i];
       Eigen::Vector2d grad = Eigen::Vector2d::Zero();
       for (int32_t k = s.begin; k < s.end; ++k) grad += u[seamTexels[k]] * seamGradients[k];
-      seamDirections[i] = direction(grad.x(), grad.y(), s.hxx, s.hxy, s.hyy, s.weight);
+      seamDirections[i] = descentDirection(grad.x(), grad.y(), s.hxx, s.hxy, s.hyy, s.weight);
     });
   });
   for (size_t i = 0; i < seams.size(); ++i)
@@ -548,15 +597,13 @@ void GeodesicSolver::requireSources() const {
 void GeodesicSolver::diffusionStep(bool full) {
   const auto start = Clock::now();
   diffusionReport_ =
-      full ? diffusionSolver_.solve(impulse_, u_) : diffusionSolver_.refine(impulse_, u_);
+      full ? diffusionSolver_.solve(impulse_, u_) : diffusionSolver_.refine(impulse_, u_, false);
   if (dirichletSolver_) {
     if (full)
       dirichletSolver_->solve(impulseDirichlet_, uDirichlet_);
     else
-      dirichletSolver_->refine(impulseDirichlet_, uDirichlet_);
+      dirichletSolver_->refine(impulseDirichlet_, uDirichlet_, false);
     heat_ = 0.5 * (u_ + uDirichlet_);
-  } else {
-    heat_ = u_;
   }
   timings_.diffusion = secondsSince(start);
 }
@@ -564,15 +611,26 @@ void GeodesicSolver::diffusionStep(bool full) {
 void GeodesicSolver::distanceStep(bool full) {
   auto start = Clock::now();
   divergence_.setZero();
-  gradients_->divergence(heat_.data(), divergence_.data());
+  gradients_->divergence(diffused().data(), divergence_.data());
   timings_.divergence = secondsSince(start);
   start = Clock::now();
-  distanceReport_ =
-      full ? distanceSolver_.solve(divergence_, y_) : distanceSolver_.step(divergence_, y_);
-  distances_ = (y_.col(0).array() - offset()) * scale_;
-  for (size_t u = 0; u < reachable_.size(); ++u)
-    if (!reachable_[u])
-      distances_[static_cast<Eigen::Index>(u)] = std::numeric_limits<double>::infinity();
+  distanceReport_ = full ? distanceSolver_.solve(divergence_, y_)
+                         : distanceSolver_.refine(divergence_, y_, false);
+  // y moves by its offset every time, so its constant part stays the size of the distances. With
+  // float V-cycles (refine), S's float rounding perturbs its null space (the constants) by far
+  // more than eps M: a drifting constant in y would leak into the distances.
+  const double shift = offset();
+  const double infinity = std::numeric_limits<double>::infinity();
+  gradients_->arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, y_.rows(), kUnknownsPerTask),
+                      [&](const tbb::blocked_range<Eigen::Index>& range) {
+                        for (Eigen::Index u = range.begin(); u != range.end(); ++u) {
+                          y_(u, 0) -= shift;
+                          distances_[u] =
+                              reachable_[static_cast<size_t>(u)] ? y_(u, 0) * scale_ : infinity;
+                        }
+                      });
+  });
   timings_.distance = secondsSince(start);
 }
 
@@ -580,6 +638,14 @@ void GeodesicSolver::update() {
   requireSources();
   diffusionStep(false);
   distanceStep(false);
+}
+
+double GeodesicSolver::residual() const {
+  requireSources();
+  double worst = diffusionSolver_.relativeResidual(impulse_, u_);
+  if (dirichletSolver_)
+    worst = std::max(worst, dirichletSolver_->relativeResidual(impulseDirichlet_, uDirichlet_));
+  return std::max(worst, distanceSolver_.relativeResidual(divergence_, y_));
 }
 
 void GeodesicSolver::solve() {

@@ -12,14 +12,18 @@
 namespace texgrad::viewer {
 namespace {
 
-/// RMS change of the distance per step, relative to the largest distance, below which the
-/// field counts as settled (far below one step of the 16-bit frame encoding).
-constexpr double kSettledRelativeChange = 1e-6;
 /// Largest R16 code for a value; kNoValue marks texels without one.
 constexpr uint16_t kMaxCode = 65534;
+/// RMS change of the distance per step, relative to the largest distance, below which the
+/// field counts as settled: one step of the 16-bit frame encoding, so further steps would not
+/// change the picture. (Float updates keep moving by about that much: GeodesicSolver::update.)
+constexpr double kSettledRelativeChange = 1.0 / kMaxCode;
 constexpr uint16_t kNoValue = 65535;
 /// Most sources a page may place with shift-clicks.
 constexpr size_t kMaxSources = 64;
+/// Steps between residual measurements (each costs a sparse product per system, a sixth of an
+/// update; the page shows the residual a few times a second).
+constexpr int kResidualEvery = 8;
 
 class GeodesicView final : public ViewerApp {
  public:
@@ -43,6 +47,7 @@ class GeodesicView final : public ViewerApp {
     } else {
       throw ProtocolError("the geodesic app does not take this message");
     }
+    stepsSinceResidual_ = 0;
   }
 
   StepResult step() override {
@@ -58,9 +63,8 @@ class GeodesicView final : public ViewerApp {
     for (Eigen::Index u = 0; u < d.size(); ++u)
       if (std::isfinite(d[u])) maxDistance_ = std::max(maxDistance_, d[u]);
     scatterTexels(domain_.grid(), d, distances_);
-    const auto& r1 = solver_.diffusionReport().residuals;
-    const auto& r2 = solver_.distanceReport().residuals;
-    result.residual = std::max(r1.empty() ? 0.0 : r1.back(), r2.empty() ? 0.0 : r2.back());
+    if (stepsSinceResidual_++ % kResidualEvery == 0) residual_ = solver_.residual();
+    result.residual = residual_;
     double change = 1.0;
     if (previous.size() == d.size() && d.size() > 0) {
       double sum = 0.0;
@@ -119,6 +123,8 @@ class GeodesicView final : public ViewerApp {
   std::vector<GeodesicSource> sources_;
   Image distances_;  ///< distance per texel (model units), 0 where inactive
   double maxDistance_ = 0.0;
+  double residual_ = 0.0;       ///< last measured (every kResidualEvery steps)
+  int stepsSinceResidual_ = 0;  ///< since the last change of sources
 };
 
 }  // namespace

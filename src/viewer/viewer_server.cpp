@@ -85,6 +85,9 @@ class WsConnection : public std::enable_shared_from_this<WsConnection> {
     beast::get_lowest_layer(ws_).expires_never();
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.read_message_max(kMaxFrameBytes);
+    // One websocket frame per message: Beast's default cuts each 2 MB texture into 4 KB frames,
+    // one system call and one wake-up of the page's network thread each.
+    ws_.auto_fragment(false);
     ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) {
       if (!ec) self->onAccept();
     });

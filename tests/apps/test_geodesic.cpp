@@ -309,13 +309,19 @@ TEST(Geodesic, MultigridUpdatesMatchDirectOnSpotSlow) {
   }
   EXPECT_LE(rms.back(), 1e-3);
   EXPECT_LT(rms[2], rms[0]);
-  for (int update = 3; update < 10; ++update) {
+  const double residualAfter3 = interactive.residual();
+  for (int update = 3; update < 20; ++update) {
     interactive.update();
-    std::cout << "spot update " << update + 1 << ": RMS / max distance "
-              << (interactive.distances() - exact.distances).norm() /
-                     std::sqrt(static_cast<double>(domain.unknowns())) / exact.maxDistance
-              << "\n";
+    rms.push_back((interactive.distances() - exact.distances).norm() /
+                  std::sqrt(static_cast<double>(domain.unknowns())) / exact.maxDistance);
+    std::cout << "spot update " << update + 1 << ": RMS / max distance " << rms.back() << "\n";
   }
+  // Float updates (y re-centred every update) settle near 1e-4 and do not drift away.
+  EXPECT_LE(*std::max_element(rms.begin() + 9, rms.end()), 2.5e-4);
+  const double residualAfter20 = interactive.residual();
+  std::cout << "spot residual after 3 / 20 updates: " << residualAfter3 << " / " << residualAfter20
+            << "\n";
+  EXPECT_LT(residualAfter20, residualAfter3);
   // The one-shot multigrid solve (default cycles) is at least as close.
   const GeodesicResult multigrid = geodesicDistance(domain, {&source, 1});
   const double oneShot = (multigrid.distances - exact.distances).norm() /

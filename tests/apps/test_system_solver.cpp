@@ -4,6 +4,7 @@
 
 #include "../solver/synthetic_problem.h"
 #include "texgrad/apps/system_solver.h"
+#include "texgrad/core/error.h"
 #include "texgrad/solver/cholmod_solver.h"
 
 namespace texgrad {
@@ -45,6 +46,28 @@ TEST(SystemSolver, RefineConvergesToFloatAccuracyAndReportsTheTrueResidual) {
     previous = reported;
   }
   EXPECT_LT((x - truth).norm() / truth.norm(), 1e-5);
+}
+
+TEST(SystemSolver, RefineWithoutResidualReportsNoneAndResidualIsMeasuredOnDemand) {
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  const Eigen::SparseMatrix<double> a = p.system(1e2);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 2, 6);
+  SystemSolver solver(p.grid, floatMultigrid());
+  solver.initAndUpdate(a);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 2);
+  EXPECT_NEAR(solver.relativeResidual(b, x), 1.0, 1e-12);
+  double previous = 1.0;
+  for (int k = 0; k < 4; ++k) {
+    const SolveReport report = solver.refine(b, x, false);
+    EXPECT_EQ(report.iterations, 1);
+    EXPECT_TRUE(report.residuals.empty());
+    const double measured = solver.relativeResidual(b, x);
+    EXPECT_NEAR(measured, relativeResidual(a, b, x), 1e-12 * measured);
+    EXPECT_LT(measured, 0.5 * previous) << "refine " << k;
+    previous = measured;
+  }
+  Eigen::MatrixXd wrong = Eigen::MatrixXd::Zero(a.rows() + 1, 2);
+  EXPECT_THROW(solver.relativeResidual(b, wrong), InvalidInputError);
 }
 
 TEST(SystemSolver, StepAfterRefineStartsFromTheTrueResidual) {

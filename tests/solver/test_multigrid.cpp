@@ -1,6 +1,8 @@
 // Solver tests: multigrid V-cycle (paper §6.2, Fig. 8) on synthetic Poisson problems, no mesh.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <cstdio>
 #include <sstream>
 
@@ -201,6 +203,22 @@ TEST(Multigrid, RefineIsOneCycleAndReportsTheTrueResidual) {
   }
   Eigen::MatrixXd wrong = Eigen::MatrixXd::Zero(a.rows() + 1, 3);
   EXPECT_THROW(single.refine(b, wrong), InvalidInputError);
+}
+
+TEST(Multigrid, RefineWithoutResidualMovesXTheSameWay) {
+  // Skipping the residual must not change the cycle: x bit for bit, and NaN for the residual.
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  const Eigen::SparseMatrix<double> a = p.system(1e2);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 2, 8);
+  MultigridSolver<float> mg;
+  mg.initAndUpdate(p.grid, a);
+  Eigen::MatrixXd measured = Eigen::MatrixXd::Zero(a.rows(), 2), unmeasured = measured;
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_TRUE(std::isfinite(mg.refine(b, measured)));
+    EXPECT_TRUE(std::isnan(mg.refine(b, unmeasured, false)));
+    EXPECT_EQ((measured - unmeasured).cwiseAbs().maxCoeff(), 0.0) << "refine " << k;
+  }
+  EXPECT_LT((b - a * unmeasured).norm() / b.norm(), 1e-2);
 }
 
 TEST(Multigrid, SummaryListsLevels) {

@@ -62,9 +62,12 @@ class SystemSolver {
   SolveReport step(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
   /// As step, but float multigrid cycles x without the double-precision residual of step
   /// (faster: no sparse product in double; accuracy stops improving near float rounding). For
-  /// frame-by-frame display. The report holds the relative residual of the new x only. Other
-  /// kinds and double cycles: step.
-  SolveReport refine(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
+  /// frame-by-frame display. The report holds the relative residual of the new x only, or no
+  /// residual with measureResidual false (the cycle then skips computing it). Other kinds and
+  /// double cycles: step.
+  SolveReport refine(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, bool measureResidual = true);
+  /// ||b - A x|| / ||b|| in double (one sparse product; ||A x|| if b = 0).
+  double relativeResidual(const Eigen::MatrixXd& b, const Eigen::MatrixXd& x) const;
   /// Multigrid hierarchy summary, or a one-line description for the direct solver.
   std::string summary() const;
   /// Seconds spent in init and in the last update.
