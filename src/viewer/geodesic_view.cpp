@@ -1,12 +1,15 @@
 // Viewer module: the geodesic app (paper §7.3) driven interactively: a click sets the source, a
 // shift-click adds one, and GeodesicSolver::update() refines u and the distance once per frame.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
 #include <cmath>
 #include <variant>
 
 #include "app_views.h"
 #include "texgrad/apps/geodesic.h"
-#include "texgrad/apps/texel_signal.h"
 #include "texgrad/io/image_io.h"
 
 namespace texgrad::viewer {
@@ -19,6 +22,8 @@ constexpr uint16_t kMaxCode = 65534;
 /// change the picture. (Float updates keep moving by about that much: GeodesicSolver::update.)
 constexpr double kSettledRelativeChange = 1.0 / kMaxCode;
 constexpr uint16_t kNoValue = 65535;
+/// Unknowns per task of the per-texel loops.
+constexpr int kUnknownsPerTask = 1 << 14;
 /// Most sources a page may place with shift-clicks.
 constexpr size_t kMaxSources = 64;
 /// Steps between residual measurements (each costs a sparse product per system, a sixth of an
@@ -56,23 +61,12 @@ class GeodesicView final : public ViewerApp {
       result.settled = true;
       return result;
     }
-    const Eigen::VectorXd previous = solver_.distances();
     solver_.update();
-    const Eigen::VectorXd& d = solver_.distances();
-    maxDistance_ = 0.0;  // over reachable texels (GeodesicSolver marks the others +inf)
-    for (Eigen::Index u = 0; u < d.size(); ++u)
-      if (std::isfinite(d[u])) maxDistance_ = std::max(maxDistance_, d[u]);
-    scatterTexels(domain_.grid(), d, distances_);
     if (stepsSinceResidual_++ % kResidualEvery == 0) residual_ = solver_.residual();
     result.residual = residual_;
-    double change = 1.0;
-    if (previous.size() == d.size() && d.size() > 0) {
-      double sum = 0.0;
-      for (Eigen::Index u = 0; u < d.size(); ++u)
-        if (std::isfinite(d[u]) && std::isfinite(previous[u]))
-          sum += (d[u] - previous[u]) * (d[u] - previous[u]);
-      change = std::sqrt(sum / static_cast<double>(d.size()));
-    }
+    const Sums sums = updatePicture();
+    maxDistance_ = sums.largest;
+    const double change = std::sqrt(sums.squaredChange / static_cast<double>(sums.count));
     result.settled = change <= kSettledRelativeChange * std::max(maxDistance_, 1e-12);
     return result;
   }
@@ -88,18 +82,22 @@ class GeodesicView final : public ViewerApp {
     const Eigen::VectorXd& d = solver_.distances();
     if (sources_.empty() || d.size() != grid.unknownCount()) return;
     const double toCode = kMaxCode / static_cast<double>(header.scale);
-    for (int u = 0; u < grid.unknownCount(); ++u) {
-      const int t = grid.texelOfUnknown[u];
-      const int x = t % grid.nx, y = t / grid.nx;
-      if (!grid.inImage(x, y)) continue;
-      if (!std::isfinite(d[u])) continue;  // unreachable from every source: no value
-      const auto code =
-          static_cast<uint16_t>(std::lround(std::clamp(d[u] * toCode, 0.0, double{kMaxCode})));
-      uint8_t* out = texels.data() + 2 * (static_cast<size_t>(y + grid.y0) * distances_.width +
-                                          static_cast<size_t>(x + grid.x0));
-      out[0] = static_cast<uint8_t>(code & 0xFFu);
-      out[1] = static_cast<uint8_t>(code >> 8);
-    }
+    tbb::parallel_for(tbb::blocked_range<int>(0, grid.unknownCount(), kUnknownsPerTask),
+                      [&](const tbb::blocked_range<int>& range) {
+                        for (int u = range.begin(); u != range.end(); ++u) {
+                          const int t = grid.texelOfUnknown[u];
+                          const int x = t % grid.nx, y = t / grid.nx;
+                          if (!grid.inImage(x, y)) continue;
+                          if (!std::isfinite(d[u])) continue;  // unreachable: no value
+                          const auto code = static_cast<uint16_t>(
+                              std::lround(std::clamp(d[u] * toCode, 0.0, double{kMaxCode})));
+                          uint8_t* out = texels.data() +
+                                         2 * (static_cast<size_t>(y + grid.y0) * distances_.width +
+                                              static_cast<size_t>(x + grid.x0));
+                          out[0] = static_cast<uint8_t>(code & 0xFFu);
+                          out[1] = static_cast<uint8_t>(code >> 8);
+                        }
+                      });
   }
 
   std::vector<double> probe(const std::vector<SurfaceHit>& points) const override {
@@ -112,6 +110,40 @@ class GeodesicView final : public ViewerApp {
   void save(const std::filesystem::path& path) const override { writeImage(path, distances_); }
 
  private:
+  /// Over the unknowns: the largest finite distance, and the squared change of the picture's
+  /// pixels (count of them), in one pass that also writes the new distances into the picture.
+  struct Sums {
+    double largest = 0.0, squaredChange = 0.0;
+    int64_t count = 0;
+  };
+
+  Sums updatePicture() {
+    const TexelGrid& grid = domain_.grid();
+    const Eigen::VectorXd& d = solver_.distances();
+    const Sums sums = tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<int>(0, grid.unknownCount(), kUnknownsPerTask), Sums{},
+        [&](const tbb::blocked_range<int>& range, Sums acc) {
+          for (int u = range.begin(); u != range.end(); ++u) {
+            if (std::isfinite(d[u])) acc.largest = std::max(acc.largest, d[u]);
+            const int t = grid.texelOfUnknown[u];
+            const int x = t % grid.nx, y = t / grid.nx;
+            if (!grid.inImage(x, y)) continue;
+            float& pixel = distances_.at(x + grid.x0, y + grid.y0);
+            if (std::isfinite(d[u]) && std::isfinite(pixel)) {
+              acc.squaredChange += (d[u] - pixel) * (d[u] - pixel);
+              ++acc.count;
+            }
+            pixel = static_cast<float>(d[u]);
+          }
+          return acc;
+        },
+        [](const Sums& a, const Sums& b) {
+          return Sums{std::max(a.largest, b.largest), a.squaredChange + b.squaredChange,
+                      a.count + b.count};
+        });
+    return {sums.largest, sums.squaredChange, std::max<int64_t>(sums.count, 1)};
+  }
+
   static GeodesicOptions geodesicOptions(const ViewerAppOptions& options) {
     GeodesicOptions g;
     g.alpha = options.geodesicAlpha;
