@@ -281,11 +281,8 @@ void GeodesicSolver::Gradients::addRowDivergence(const CellSample* first, const 
     const double gx = (1 - fy) * (v[1] - v[0]) + fy * (v[3] - v[2]);
     const double gy = (1 - fx) * (v[2] - v[0]) + fx * (v[3] - v[1]);
     const FaceMetric& m = metrics[s->face];
-    const double zx = m.hxx * gx + m.hxy * gy, zy = m.hxy * gx + m.hyy * gy;
-    const double norm2 = gx * zx + gy * zy;
-    const bool ok = (norm2 > 0.0) & (norm2 <= std::numeric_limits<double>::max());
-    const double scale = (ok ? -(s->area * m.root) : 0.0) / std::sqrt(ok ? norm2 : 1.0);
-    const double xx = scale * zx, xy = scale * zy;
+    const Eigen::Vector2d x = descentDirection(gx, gy, m.hxx, m.hxy, m.hyy, s->area * m.root);
+    const double xx = x.x(), xy = x.y();
     sum[0] += -(1 - fy) * xx - (1 - fx) * xy;
     sum[1] += (1 - fy) * xx - fx * xy;
     sum[2] += -fy * xx + (1 - fx) * xy;
