@@ -5,6 +5,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 #include <Eigen/LU>
 
@@ -113,6 +114,9 @@ struct GeodesicSolver::Gradients {
   std::vector<int32_t> seamTexels;
   std::vector<Eigen::Vector2d> seamGradients;
   std::vector<Eigen::Vector2d> seamDirections;  ///< per seam sample: X of the last divergence
+  std::vector<int32_t> seamTargets;             ///< the distinct texels of seamTexels, ascending
+  std::vector<int32_t> seamTargetOfEntry;  ///< per seam entry: index of its texel in seamTargets
+  std::vector<double> seamSums;            ///< per seam target: sum of the last divergence
   tbb::task_arena arena;
 
   Gradients(const TexelDomain& domain, int threads)
@@ -121,8 +125,9 @@ struct GeodesicSolver::Gradients {
   }
 
   void build(const TexelDomain& domain);
-  /// Adds div_h(-du/|du|) of the function with coefficients u to div (one-point quadrature).
-  void divergence(const double* u, double* div);
+  /// Sets div (n values) to div_h(-du/|du|) of the function with coefficients u (one-point
+  /// quadrature).
+  void divergence(const double* u, double* div, Eigen::Index n);
   /// The cell-sample part of divergence for the samples [first, last) of one cell row.
   static void addRowDivergence(const CellSample* first, const CellSample* last,
                                const FaceMetric* metrics, const double* u, double* div);
@@ -233,6 +238,16 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
     std::stable_sort(cells.begin() + rowBegin[row], cells.begin() + rowBegin[row + 1],
                      [](const CellSample& a, const CellSample& b) { return a.cellX < b.cellX; });
   });
+  seamTargets = seamTexels;
+  std::sort(seamTargets.begin(), seamTargets.end());
+  seamTargets.erase(std::unique(seamTargets.begin(), seamTargets.end()), seamTargets.end());
+  seamTargetOfEntry.resize(seamTexels.size());
+  for (size_t k = 0; k < seamTexels.size(); ++k)
+    seamTargetOfEntry[k] = static_cast<int32_t>(
+        std::lower_bound(seamTargets.begin(), seamTargets.end(), seamTexels[k]) -
+        seamTargets.begin());
+  seamSums.assign(seamTargets.size(), 0.0);
+  seamDirections.resize(seams.size());
 }
 
 namespace {
@@ -291,32 +306,43 @@ void GeodesicSolver::Gradients::addRowDivergence(const CellSample* first, const 
   for (int k = 0; k < 4; ++k) flush(k);
 }
 
-void GeodesicSolver::Gradients::divergence(const double* u, double* div) {
+void GeodesicSolver::Gradients::divergence(const double* u, double* div, Eigen::Index n) {
   arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, n, kUnknownsPerTask),
+                      [&](const tbb::blocked_range<Eigen::Index>& range) {
+                        std::fill(div + range.begin(), div + range.end(), 0.0);
+                      });
     const int rows = static_cast<int>(rowBegin.size()) - 1;  // cell rows -1 .. ny - 1
     // Cell rows b and b + 2 touch disjoint texel rows, so each colour runs its rows in parallel;
     // every texel gets its contributions in the same order for any thread count.
-    for (int colour = 0; colour < 2; ++colour) {
-      tbb::parallel_for(0, (rows + 1 - colour) / 2, [&](int half) {
-        const size_t slot = static_cast<size_t>(2 * half + colour);
-        addRowDivergence(cells.data() + rowBegin[slot], cells.data() + rowBegin[slot + 1],
-                         faceMetrics.data(), u, div);
+    auto cellPart = [&] {
+      for (int colour = 0; colour < 2; ++colour) {
+        tbb::parallel_for(0, (rows + 1 - colour) / 2, [&](int half) {
+          const size_t slot = static_cast<size_t>(2 * half + colour);
+          addRowDivergence(cells.data() + rowBegin[slot], cells.data() + rowBegin[slot + 1],
+                           faceMetrics.data(), u, div);
+        });
+      }
+    };
+    // Seam samples share texels in no fixed pattern: directions in parallel, then the sums in
+    // entry order into a compact array per seam texel, alongside the cell part.
+    auto seamPart = [&] {
+      tbb::parallel_for(size_t(0), seams.size(), [&](size_t i) {
+        const SeamSample& s = seams[i];
+        Eigen::Vector2d grad = Eigen::Vector2d::Zero();
+        for (int32_t k = s.begin; k < s.end; ++k) grad += u[seamTexels[k]] * seamGradients[k];
+        seamDirections[i] = descentDirection(grad.x(), grad.y(), s.hxx, s.hxy, s.hyy, s.weight);
       });
-    }
+      std::fill(seamSums.begin(), seamSums.end(), 0.0);
+      for (size_t i = 0; i < seams.size(); ++i)
+        for (int32_t k = seams[i].begin; k < seams[i].end; ++k)
+          seamSums[static_cast<size_t>(seamTargetOfEntry[static_cast<size_t>(k)])] +=
+              seamGradients[k].dot(seamDirections[i]);
+    };
+    tbb::parallel_invoke(cellPart, seamPart);
+    tbb::parallel_for(size_t(0), seamTargets.size(),
+                      [&](size_t j) { div[seamTargets[j]] += seamSums[j]; });
   });
-  // Seam samples share texels in no fixed pattern: directions in parallel, sums in order.
-  seamDirections.resize(seams.size());
-  arena.execute([&] {
-    tbb::parallel_for(size_t(0), seams.size(), [&](size_t i) {
-      const SeamSample& s = seams[i];
-      Eigen::Vector2d grad = Eigen::Vector2d::Zero();
-      for (int32_t k = s.begin; k < s.end; ++k) grad += u[seamTexels[k]] * seamGradients[k];
-      seamDirections[i] = descentDirection(grad.x(), grad.y(), s.hxx, s.hxy, s.hyy, s.weight);
-    });
-  });
-  for (size_t i = 0; i < seams.size(); ++i)
-    for (int32_t k = seams[i].begin; k < seams[i].end; ++k)
-      div[seamTexels[k]] += seamGradients[k].dot(seamDirections[i]);
 }
 
 GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options)
@@ -607,8 +633,7 @@ void GeodesicSolver::diffusionStep(bool full) {
 
 void GeodesicSolver::distanceStep(bool full) {
   auto start = Clock::now();
-  divergence_.setZero();
-  gradients_->divergence(diffused().data(), divergence_.data());
+  gradients_->divergence(diffused().data(), divergence_.data(), divergence_.rows());
   timings_.divergence = secondsSince(start);
   start = Clock::now();
   distanceReport_ = full ? distanceSolver_.solve(divergence_, y_)
