@@ -7,7 +7,7 @@ packages=(
   libeigen3-dev libsuitesparse-dev libtbb-dev
   # CHOLMOD's supernodal factorisation and solves run on BLAS (Debian's libblas.so.3
   # alternative): OpenBLAS instead of the reference BLAS makes a direct geodesic on spot at
-  # 1024² 2.7x faster. Its serial build starts no threads of its own next to TBB's.
+  # 1024² 2.4x faster (18.1 -> 7.5 s). Its serial build starts no threads of its own next to TBB's.
   libopenblas0-serial
   libopenimageio-dev libtinyobjloader-dev libtinygltf-dev nlohmann-json3-dev libstb-dev
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
