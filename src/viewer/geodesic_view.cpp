@@ -17,11 +17,11 @@ namespace {
 
 /// Largest R16 code for a value; kNoValue marks texels without one.
 constexpr uint16_t kMaxCode = 65534;
+constexpr uint16_t kNoValue = 65535;
 /// RMS change of the distance per step, relative to the largest distance, below which the
 /// field counts as settled: one step of the 16-bit frame encoding, so further steps would not
 /// change the picture. (Float updates keep moving by about that much: GeodesicSolver::update.)
 constexpr double kSettledRelativeChange = 1.0 / kMaxCode;
-constexpr uint16_t kNoValue = 65535;
 /// Unknowns per task of the per-texel loops.
 constexpr int kUnknownsPerTask = 1 << 14;
 /// Most sources a page may place with shift-clicks.

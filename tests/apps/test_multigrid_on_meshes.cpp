@@ -86,19 +86,22 @@ TEST_P(Fig11Slow, MultigridConvergesGeometricallyToTheDirectSolution) {
   for (int k = 5; k <= last; k += 5) EXPECT_LT(d[k], 0.9 * d[k - 5]) << "cycle " << k;
 
   // The same V-cycle as a CG preconditioner (one V-cycle per iteration, paper §8): the few slow
-  // modes that limit plain cycles on some atlases are what CG removes first.
+  // modes that limit plain cycles on some atlases are what CG removes first. CG stops at a
+  // relative residual of 1e-12 and must be within 1e-8 of the CHOLMOD reference, whose own error
+  // reaches ~1e-10 on Lantern (one step of iterative refinement moves it by that much; with
+  // OpenBLAS a 1e-14 residual stop left CG 1.4e-10 away and the factor measured the reference).
   MultigridSolver<double> preconditioner;
   preconditioner.initAndUpdate(domain.grid(), p.a);
   Eigen::MatrixXd xc = Eigen::MatrixXd::Zero(p.b.rows(), p.b.cols());
   CgOptions cg;
   cg.maxIterations = 60;
-  cg.tolerance = 1e-14;
+  cg.tolerance = 1e-12;
   const SolveReport pcg = conjugateGradient(p.a, p.b, xc, multigridPreconditioner(preconditioner), cg);
   const double pcgError = (xc - p.truth).norm() / p.truth.norm();
   const double pcgFactor = std::pow(pcgError, 1.0 / std::max(1, pcg.iterations));
   std::cout << "[ fig11 ] " << s.name << " MG-PCG: error " << pcgError << " after "
             << pcg.iterations << " iterations, factor " << pcgFactor << " per iteration\n";
-  EXPECT_LE(pcgError, 1e-10);
+  EXPECT_LE(pcgError, 1e-8);
   EXPECT_LE(pcgFactor, factor);
 
   // Float cycles as the apps run them: float V-cycles, residual in double (SystemSolver).
