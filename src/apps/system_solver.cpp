@@ -21,12 +21,6 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-double relativeResidualOf(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,
-                          const Eigen::MatrixXd& x) {
-  const double norm = b.norm();
-  return norm > 0 ? (b - a * x).norm() / norm : (a * x).norm();
-}
-
 /// Rows per task in the parallel vector kernels below (fixed: results do not depend on threads).
 constexpr Eigen::Index kRowsPerTask = 1 << 14;
 
@@ -212,15 +206,24 @@ struct SystemSolver::Impl {
     cacheValid = true;
   }
 
+  /// ||b - A x|| / ||b|| (||A x|| if b = 0), on the solver's threads.
+  double relativeResidual(const Eigen::MatrixXd& b, const Eigen::MatrixXd& x) {
+    double rr = 0.0;
+    Eigen::MatrixXd scratch;  // not r: that holds the residual step() may reuse
+    arena.execute([&] { rr = residual(a, b, x, scratch); });
+    const double norm = b.norm();
+    return norm > 0 ? std::sqrt(rr) / norm : std::sqrt(rr);
+  }
+
   SolveReport directSolve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
     const auto start = std::chrono::steady_clock::now();
     SolveReport report;
-    report.residuals.push_back(relativeResidualOf(a, b, x));
+    report.residuals.push_back(relativeResidual(b, x));
     const Eigen::MatrixXd previous = x;
     x = direct.solve(b);
     report.iterations = 1;
     report.converged = true;
-    report.residuals.push_back(relativeResidualOf(a, b, x));
+    report.residuals.push_back(relativeResidual(b, x));
     report.rmsChange.push_back((x - previous).norm() /
                                std::sqrt(static_cast<double>(std::max<Eigen::Index>(1, x.size()))));
     report.times.other = secondsSince(start);
@@ -335,11 +338,7 @@ double SystemSolver::relativeResidual(const Eigen::MatrixXd& b, const Eigen::Mat
   if (b.rows() != impl_->a.rows() || x.rows() != b.rows() || x.cols() != b.cols())
     throw InvalidInputError("SystemSolver::relativeResidual: b and x must both be " +
                             std::to_string(impl_->a.rows()) + " x k");
-  double rr = 0.0;
-  Eigen::MatrixXd r;
-  impl_->arena.execute([&] { rr = residual(impl_->a, b, x, r); });
-  const double norm = b.norm();
-  return norm > 0 ? std::sqrt(rr) / norm : std::sqrt(rr);
+  return impl_->relativeResidual(b, x);
 }
 
 std::string SystemSolver::summary() const {
