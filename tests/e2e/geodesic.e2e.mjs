@@ -4,7 +4,7 @@
 import { mkdirSync } from "node:fs";
 import { join } from "node:path";
 import { canvasPixel, check, distance3, openPage, repo, sharedData, spearman, startServer,
-         stopServer, surfaceSamples, waitForState } from "./harness.mjs";
+         stopServer, surfaceSamples, waitForPage, waitForState } from "./harness.mjs";
 
 const outDir = process.env.TEXGRAD_E2E_OUT || join(repo, "build", "e2e");
 mkdirSync(outDir, { recursive: true });
@@ -33,16 +33,22 @@ export async function run() {
     const click = { x: Math.round(size.width * 0.5), y: Math.round(size.height * 0.5) };
     const aimed = await page.evaluate(([x, y]) => window.texgrad.pick(x, y), [click.x, click.y]);
     check(aimed !== null, "the model is under the centre of the view");
-    const framesBefore = await page.evaluate(() => window.texgrad.stats.frames);
+    // The server idles before the click (no source yet): every step counted after it is the
+    // click's.
+    const idle = await waitForState(page, (s) => !s.running, 30000);
     await page.mouse.click(click.x, click.y);
-    await page.waitForFunction((n) => window.texgrad.stats.frames >= n + 10, framesBefore,
-                               { timeout: 60000 });
-    check(true, "the page received 10 texture updates after the click");
-    // The source is the surface point the page picked at the click (the layout may have moved
-    // since `aimed`, e.g. when the first frame arrived).
-    const source = await page.evaluate(() => window.texgrad.stats.lastSource);
-    check(source && source.face >= 0, `the click set a source (face ${source && source.face})`);
-    const state = await waitForState(page, (s) => !s.running && s.iteration > 0, 90000);
+    const source = await waitForPage(page, () => window.texgrad.stats.lastSource, 10000,
+                                     "the click to set a source");
+    check(source.face >= 0, `the click set a source (face ${source.face})`);
+    const state = await waitForState(
+        page, (s) => s.totalSteps > idle.totalSteps && !s.running && s.iteration > 0, 90000);
+    const settled = await waitForPage(page, (seq) => { const h = window.texgrad.stats.last;
+                                                       return h && h.sequence >= seq ? h : null; },
+                                      30000, "the page to receive the settled frame",
+                                      state.sequence);
+    check(state.totalSteps - idle.totalSteps >= 2 && settled.iteration === state.iteration,
+          `the page shows the settled frame (iteration ${settled.iteration} of ` +
+          `${state.totalSteps - idle.totalSteps} steps after the click)`);
     console.log(`  server: ${state.iteration} steps, residual ${state.residual.toExponential(2)}, ` +
                 `${state.updatesPerSecond.toFixed(1)} updates/s`);
 

@@ -84,6 +84,20 @@ export async function waitForState(page, predicate, timeoutMs = 60000) {
   }
 }
 
+/// Waits until `fn(arg)`, evaluated in the page every 100 ms, returns a truthy value and returns
+/// it; on time-out throws with `what` and the page's frame statistics.
+export async function waitForPage(page, fn, timeoutMs, what, arg = null) {
+  try {
+    const handle = await page.waitForFunction(fn, arg, { timeout: timeoutMs, polling: 100 });
+    return await handle.jsonValue();
+  } catch (e) {
+    const seen = await page.evaluate(() => ({ frames: window.texgrad.stats.frames,
+                                              last: window.texgrad.stats.last,
+                                              server: window.texgrad.stats.serverState }));
+    throw new Error(`timed out waiting for ${what}; page: ${JSON.stringify(seen)}`);
+  }
+}
+
 /// RGBA of the rendered canvas at CSS pixel (x, y) (the renderer keeps its drawing buffer).
 export function canvasPixel(page, x, y) {
   return page.evaluate(([px, py]) => {
