@@ -26,7 +26,7 @@ const TexelDomain& spotDomain() {
 }
 
 GeodesicOptions benchOptions() {
-  GeodesicOptions options;
+  GeodesicOptions options = GeodesicOptions::interactive();
   options.solver.multigrid.threads = kThreads;
   return options;
 }

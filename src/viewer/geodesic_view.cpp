@@ -145,7 +145,7 @@ class GeodesicView final : public ViewerApp {
   }
 
   static GeodesicOptions geodesicOptions(const ViewerAppOptions& options) {
-    GeodesicOptions g;
+    GeodesicOptions g = GeodesicOptions::interactive();
     g.alpha = options.geodesicAlpha;
     return g;
   }

@@ -317,7 +317,7 @@ TEST(Geodesic, MultigridUpdatesMatchDirectOnSpotSlow) {
   const TexelDomain domain(readMesh(test::sharedData() / spot.obj), 1024, 1024);
   const GeodesicSource source = GeodesicSource::atVertex(100);
   const GeodesicResult exact = geodesicDistance(domain, {&source, 1}, directOptions());
-  GeodesicSolver interactive(domain);
+  GeodesicSolver interactive(domain, GeodesicOptions::interactive());
   interactive.setSource(source);
   std::vector<double> rms;
   for (int update = 0; update < 3; ++update) {
