@@ -1,7 +1,8 @@
 // Benchmark: updates per second of the geodesic app (spot, 1024²), server side (solver steps)
 // and as seen by the page (texture frames received, and uploaded and drawn on the model).
 import { join } from "node:path";
-import { openPage, sharedData, startServer, stopServer, waitForState } from "./harness.mjs";
+import { openPage, sharedData, startServer, stopServer, waitForPage, waitForState }
+  from "./harness.mjs";
 
 const server = await startServer([join(sharedData, "spot", "spot_triangulated.obj"),
                                   "--app", "geodesic", "--max-fps", "1000",
@@ -34,8 +35,8 @@ try {
     await page.mouse.click(...point);
     const done = await waitForState(
         page, (st) => st.totalSteps > idle.totalSteps && !st.running, 120000);
-    await page.waitForFunction((n) => window.frameLog.some((f) => f.iteration >= n),
-                               done.iteration, { timeout: 30000 });
+    await waitForPage(page, (n) => window.frameLog.some((f) => f.iteration >= n), 30000,
+                      "the page to receive the click's last frame", done.iteration);
     const log = await page.evaluate(() => window.frameLog.filter((f) => f.iteration >= 1));
     if (log.length < 2) continue;  // settled at once: nothing to time
     const first = log[0], last = log[log.length - 1];
