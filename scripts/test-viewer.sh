@@ -10,5 +10,5 @@ bash scripts/build-viewer.sh
 export TEXGRAD_CLI="$PWD/$build/texgrad" TEXGRAD_E2E_OUT="$PWD/$build/e2e"
 timeout 600 node tests/e2e/run-all.mjs
 if [[ "${2:-}" == "--bench" ]]; then
-  timeout 300 node tests/e2e/bench-updates.mjs
+  timeout 300 node --experimental-websocket tests/e2e/bench-updates.mjs
 fi

@@ -1,14 +1,15 @@
 // Benchmark: updates per second of the geodesic app (spot, 1024²), server side (solver steps)
 // and as seen by the page (texture frames received, and uploaded and drawn on the model).
 import { join } from "node:path";
-import { openPage, sharedData, startServer, stopServer, waitForPage, waitForState }
-  from "./harness.mjs";
+import { openBarePage } from "./devtools.mjs";
+import { sharedData, startServer, stopServer, waitForPage, waitForState } from "./harness.mjs";
 
 const server = await startServer([join(sharedData, "spot", "spot_triangulated.obj"),
                                   "--app", "geodesic", "--max-fps", "1000",
                                   "--max-iterations", "100000"]);
+let page = null;
 try {
-  const { browser, page } = await openPage(server.url);
+  ({ page } = await openBarePage(server.url));
   const size = page.viewportSize();
   // The solver settles (an update no longer changes the 16-bit picture) within about ten updates
   // of a click and then idles, so the rates are measured over the refinement after each of
@@ -53,7 +54,7 @@ try {
               `${(lastFrame * 1000).toFixed(1)} ms), page ${(frames / active).toFixed(2)} ` +
               `updates/s received, ${(shown / active).toFixed(2)} shown, over ${steps} updates ` +
               `in ${active.toFixed(1)} s of refinement after ${counted} of ${points.length} clicks`);
-  await browser.close();
 } finally {
+  if (page) await page.close();
   await stopServer(server);
 }

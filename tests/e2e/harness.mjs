@@ -85,16 +85,20 @@ export async function waitForState(page, predicate, timeoutMs = 60000) {
 }
 
 /// Waits until `fn(arg)`, evaluated in the page every 100 ms, returns a truthy value and returns
-/// it; on time-out throws with `what` and the page's frame statistics.
+/// it; on time-out throws with `what` and the page's frame statistics. Uses only page.evaluate,
+/// so it also drives devtools.mjs's bare page.
 export async function waitForPage(page, fn, timeoutMs, what, arg = null) {
-  try {
-    const handle = await page.waitForFunction(fn, arg, { timeout: timeoutMs, polling: 100 });
-    return await handle.jsonValue();
-  } catch (e) {
-    const seen = await page.evaluate(() => ({ frames: window.texgrad.stats.frames,
-                                              last: window.texgrad.stats.last,
-                                              server: window.texgrad.stats.serverState }));
-    throw new Error(`timed out waiting for ${what}; page: ${JSON.stringify(seen)}`);
+  const start = Date.now();
+  for (;;) {
+    const value = await page.evaluate(fn, arg);
+    if (value) return value;
+    if (Date.now() - start > timeoutMs) {
+      const seen = await page.evaluate(() => ({ frames: window.texgrad.stats.frames,
+                                                last: window.texgrad.stats.last,
+                                                server: window.texgrad.stats.serverState }));
+      throw new Error(`timed out waiting for ${what}; page: ${JSON.stringify(seen)}`);
+    }
+    await new Promise((r) => setTimeout(r, 100));
   }
 }
 

@@ -90,13 +90,26 @@ function buildGeometry(mesh) {
   return geometry;
 }
 
+/// Whether WebGL runs without a GPU (the renderer's name where the browser tells it).
+function softwareRenderer() {
+  const gl = document.createElement("canvas").getContext("webgl2");
+  if (!gl) return false;
+  const info = gl.getExtension("WEBGL_debug_renderer_info");
+  const name = String(gl.getParameter(info ? info.UNMASKED_RENDERER_WEBGL : gl.RENDERER));
+  gl.getExtension("WEBGL_lose_context")?.loseContext();
+  return /swiftshader|llvmpipe|softpipe|software/i.test(name);
+}
+
 async function main() {
   const info = await (await fetch(withToken("/api/info"))).json();
   const mesh = decodeMesh(await (await fetch(withToken("/api/mesh"))).arrayBuffer());
   $("app-name").textContent = info.app;
   $(`${info.app}-controls`).classList.remove("hidden");
 
-  const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  // Multisampling costs a software renderer (no GPU: SwiftShader, llvmpipe) a large part of each
+  // frame, so it is only asked of hardware.
+  const renderer = new THREE.WebGLRenderer({ antialias: !softwareRenderer(),
+                                             preserveDrawingBuffer: true });
   renderer.setPixelRatio(window.devicePixelRatio);
   renderer.setSize(window.innerWidth, window.innerHeight);
   $("view").appendChild(renderer.domElement);
