@@ -20,7 +20,7 @@ struct InfoArgs {
   int maxIds = 20;
 };
 
-nlohmann::json toJson(const AtlasReport& r) {
+nlohmann::json atlasJson(const AtlasReport& r) {
   nlohmann::json j;
   j["vertices"] = r.vertices;
   j["uv_vertices"] = r.uvVertices;
@@ -106,7 +106,7 @@ void runInfo(const InfoArgs& args) {
   }
   const AtlasReport report = analyzeAtlas(mesh, atlas, grid ? &*grid : nullptr);
   if (args.json) {
-    nlohmann::json j = toJson(report);
+    nlohmann::json j = atlasJson(report);
     j["mesh"] = args.mesh;
     printJson(j);
   } else {

@@ -49,6 +49,45 @@ std::vector<Buffer> sampleSurface(const fem::TexelBasis& basis, int grain, int d
   return buffers;
 }
 
+/// Entries of *1 summed over the quadrature points of one piece at a time (its texels, hence its
+/// forms, are the same at every point), so each piece adds (forms)^2 triplets, not that many per
+/// point.
+struct StarSums {
+  /// One Whitney form omega_(s,t) of the piece: local texel indices i, j and its pair index.
+  struct Form {
+    int i, j, pair;
+  };
+  std::vector<Eigen::Triplet<double>> triplets;
+  std::vector<int32_t> texels;  ///< of the piece being summed
+  std::vector<Form> forms;
+  std::vector<Eigen::Vector2d> values;  ///< omega_a at the current point
+  Eigen::MatrixXd sums;                 ///< forms x forms
+
+  /// Emits the current piece's sums and starts summing the piece with these texels.
+  template <typename PairIndex>
+  void start(const std::vector<int32_t>& pieceTexels, PairIndex&& pairIndex) {
+    flush();
+    texels = pieceTexels;
+    for (size_t i = 0; i < texels.size(); ++i)
+      for (size_t j = 0; j < texels.size(); ++j)
+        if (texels[i] >= 0 && texels[j] >= 0 && texels[i] < texels[j])
+          forms.push_back(
+              {static_cast<int>(i), static_cast<int>(j), pairIndex(texels[i], texels[j])});
+    values.resize(forms.size());
+    const auto count = static_cast<Eigen::Index>(forms.size());
+    sums = Eigen::MatrixXd::Zero(count, count);
+  }
+
+  /// Emits the current piece's sums.
+  void flush() {
+    for (size_t a = 0; a < forms.size(); ++a)
+      for (size_t b = 0; b < forms.size(); ++b)
+        triplets.emplace_back(forms[a].pair, forms[b].pair,
+                              sums(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)));
+    forms.clear();
+  }
+};
+
 using Contributions = std::vector<std::pair<int32_t, double>>;
 
 Eigen::VectorXd reduce(const std::vector<Contributions>& buffers, int n) {
@@ -94,27 +133,32 @@ SparseMatrixd TexelOperators::hodgeStar1() const {
     const auto it = std::lower_bound(pairs.begin(), pairs.end(), std::make_pair(s, t));
     return static_cast<int>(it - pairs.begin());
   };
-  using Triplets = std::vector<Eigen::Triplet<double>>;
   const auto& factors = impl_->factors;
-  const auto buffers = sampleSurface<Triplets>(
+  auto buffers = sampleSurface<StarSums>(
       impl_->basis, impl_->options.facesPerTask, kHodgeStarDegree,
-      [&](Triplets& out, int f, const Eigen::Vector2d&, double w, const std::vector<int32_t>& texels,
-          const Eigen::VectorXd& v, const Eigen::MatrixXd& g) {
+      [&](StarSums& out, int f, const Eigen::Vector2d&, double w,
+          const std::vector<int32_t>& texels, const Eigen::VectorXd& v, const Eigen::MatrixXd& g) {
+        if (texels != out.texels) out.start(texels, pairIndex);
         const auto& m = factors[f];
-        std::vector<std::pair<int, Eigen::Vector2d>> forms;  // (pair index, omega_a at the point)
-        for (size_t i = 0; i < texels.size(); ++i)
-          for (size_t j = 0; j < texels.size(); ++j) {
-            if (texels[i] < 0 || texels[j] < 0 || texels[i] >= texels[j]) continue;
-            const Eigen::Vector2d form = v[i] * g.row(j).transpose() - v[j] * g.row(i).transpose();
-            forms.emplace_back(pairIndex(texels[i], texels[j]), form);
-          }
-        for (const auto& [a, wa] : forms) {
-          const Eigen::Vector2d raised(m.xx * wa.x() + m.xy * wa.y(), m.xy * wa.x() + m.yy * wa.y());
-          for (const auto& [b, wb] : forms) out.emplace_back(a, b, w * raised.dot(wb));
+        const size_t count = out.forms.size();
+        for (size_t a = 0; a < count; ++a) {  // omega_a at the point
+          const auto [i, j, pair] = out.forms[a];
+          out.values[a] = v[i] * g.row(j).transpose() - v[j] * g.row(i).transpose();
+        }
+        for (size_t a = 0; a < count; ++a) {
+          const Eigen::Vector2d& wa = out.values[a];
+          const Eigen::Vector2d raised(m.xx * wa.x() + m.xy * wa.y(),
+                                       m.xy * wa.x() + m.yy * wa.y());
+          for (size_t b = 0; b < count; ++b)
+            out.sums(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) +=
+                w * raised.dot(out.values[b]);
         }
       });
-  Triplets all;
-  for (const auto& b : buffers) all.insert(all.end(), b.begin(), b.end());
+  std::vector<Eigen::Triplet<double>> all;
+  for (auto& b : buffers) {
+    b.flush();
+    all.insert(all.end(), b.triplets.begin(), b.triplets.end());
+  }
   const auto n = static_cast<Eigen::Index>(pairs.size());
   SparseMatrixd star(n, n);
   star.setFromTriplets(all.begin(), all.end());

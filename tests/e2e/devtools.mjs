@@ -120,7 +120,8 @@ function barePage(send, size, close) {
     async evaluate(fn, arg = null) {
       const { result, exceptionDetails } = await send("Runtime.evaluate", {
         expression: `(${fn})(${JSON.stringify(arg)})`, awaitPromise: true, returnByValue: true });
-      if (exceptionDetails) throw new Error(`in the page: ${exceptionDetails.exception?.description}`);
+      if (exceptionDetails)
+        throw new Error(`in the page: ${exceptionDetails.exception?.description}`);
       return result.value;
     },
     mouse: {
