@@ -2,14 +2,26 @@
 // and as seen by the page (texture frames received, and uploaded and drawn on the model).
 import { join } from "node:path";
 import { openBarePage } from "./devtools.mjs";
-import { sharedData, startServer, stopServer, waitForPage, waitForState } from "./harness.mjs";
+import { openPage, sharedData, startServer, stopServer, waitForPage, waitForState }
+  from "./harness.mjs";
+
+// --playwright: drive the page through playwright as the end-to-end tests do, for comparison
+// (playwright's Network domain copies every frame to the driver: devtools.mjs).
+const viaPlaywright = process.argv.includes("--playwright");
 
 const server = await startServer([join(sharedData, "spot", "spot_triangulated.obj"),
                                   "--app", "geodesic", "--max-fps", "1000",
                                   "--max-iterations", "100000"]);
-let page = null;
+let page = null, close = null;
 try {
-  ({ page } = await openBarePage(server.url));
+  if (viaPlaywright) {
+    const opened = await openPage(server.url);
+    page = opened.page;
+    close = () => opened.browser.close();
+  } else {
+    ({ page } = await openBarePage(server.url));
+    close = () => page.close();
+  }
   const size = page.viewportSize();
   // The solver settles (an update no longer changes the 16-bit picture) within about ten updates
   // of a click and then idles, so the rates are measured over the refinement after each of
@@ -49,12 +61,12 @@ try {
     lastFrame = done.lastFrameSeconds;
     counted += 1;
   }
-  console.log(`geodesic spot 1024^2: server ${(steps / active).toFixed(2)} updates/s ` +
+  console.log(`geodesic spot 1024^2 (${viaPlaywright ? "playwright" : "bare DevTools"}): server ${(steps / active).toFixed(2)} updates/s ` +
               `(last step ${(lastStep * 1000).toFixed(0)} ms, frame encoding ` +
               `${(lastFrame * 1000).toFixed(1)} ms), page ${(frames / active).toFixed(2)} ` +
               `updates/s received, ${(shown / active).toFixed(2)} shown, over ${steps} updates ` +
               `in ${active.toFixed(1)} s of refinement after ${counted} of ${points.length} clicks`);
 } finally {
-  if (page) await page.close();
+  if (close) await close();
   await stopServer(server);
 }
