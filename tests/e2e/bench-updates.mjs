@@ -61,7 +61,9 @@ try {
     lastFrame = done.lastFrameSeconds;
     counted += 1;
   }
-  console.log(`geodesic spot 1024^2 (${viaPlaywright ? "playwright" : "bare DevTools"}): server ${(steps / active).toFixed(2)} updates/s ` +
+  const driver = viaPlaywright ? "playwright" : "bare DevTools";
+  console.log(`geodesic spot 1024^2 (${driver}): ` +
+              `server ${(steps / active).toFixed(2)} updates/s ` +
               `(last step ${(lastStep * 1000).toFixed(0)} ms, frame encoding ` +
               `${(lastFrame * 1000).toFixed(1)} ms), page ${(frames / active).toFixed(2)} ` +
               `updates/s received, ${(shown / active).toFixed(2)} shown, over ${steps} updates ` +

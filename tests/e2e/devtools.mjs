@@ -8,9 +8,9 @@ import { spawn } from "node:child_process";
 import { mkdtempSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
-import { chromiumPath } from "./harness.mjs";
+import { chromiumFlags, chromiumPath } from "./harness.mjs";
 
-/// Starts headless Chromium with software WebGL (the flags of harness.openPage), opens `url` in a
+/// Starts headless Chromium with software WebGL (harness.chromiumFlags), opens `url` in a
 /// width x height viewport and resolves, once the viewer page is ready, with a page object
 /// offering evaluate(fn, arg), mouse.click(x, y), viewportSize() and close().
 export async function openBarePage(url, { width = 900, height = 700, timeoutMs = 60000 } = {}) {
@@ -18,9 +18,8 @@ export async function openBarePage(url, { width = 900, height = 700, timeoutMs =
     throw new Error("this node has no WebSocket client: run it with --experimental-websocket");
   const profile = mkdtempSync(join(tmpdir(), "texgrad-chromium-"));
   const browser = spawn(chromiumPath, [
-    "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-    "--ignore-gpu-blocklist", "--disable-dev-shm-usage", "--no-first-run",
-    "--remote-debugging-port=0", `--user-data-dir=${profile}`, "about:blank"],
+    "--headless", ...chromiumFlags, "--no-first-run", "--remote-debugging-port=0",
+    `--user-data-dir=${profile}`, "about:blank"],
                         { stdio: ["ignore", "ignore", "pipe"], detached: true });
   const exited = new Promise((r) => browser.on("exit", r));
   let cdp = null;
@@ -56,7 +55,7 @@ export async function openBarePage(url, { width = 900, height = 700, timeoutMs =
       if (Date.now() - start > timeoutMs) throw new Error("the viewer page did not get ready");
       await new Promise((r) => setTimeout(r, 100));
     }
-    return { page, browser: page };
+    return { page };
   } catch (e) {
     await closeBrowser();
     throw e;

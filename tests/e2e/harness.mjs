@@ -52,14 +52,18 @@ export function stopServer(server) {
   });
 }
 
+/// Chromium flags for software WebGL in a container (--disable-dev-shm-usage: containers, CI
+/// among them, often have a 64 MB /dev/shm).
+export const chromiumFlags = ["--no-sandbox", "--use-angle=swiftshader",
+                              "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist",
+                              "--disable-dev-shm-usage"];
+
 /// Launches headless Chromium with software WebGL and opens the viewer page.
 export async function openPage(url, { width = 900, height = 700 } = {}) {
   const browser = await chromium.launch({
     executablePath: chromiumPath,
     headless: true,
-    // --disable-dev-shm-usage: containers (CI) often have a 64 MB /dev/shm.
-    args: ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-           "--ignore-gpu-blocklist", "--disable-dev-shm-usage"],
+    args: chromiumFlags,
   });
   const page = await browser.newPage({ viewport: { width, height } });
   const errors = [];
