@@ -98,18 +98,19 @@ const SpotProblem& spot(int size) {
   return p;
 }
 
-/// Runs V-cycles on 3 channels and reports the time per phase.
+/// Runs V-cycles on `channels` channels (RGB by default) and reports the time per phase.
 template <typename T>
 void runCycles(benchmark::State& state, const TexelGrid& grid, const Eigen::SparseMatrix<double>& a,
-               int threads) {
+               int threads, int channels = 3, int sweeps = MultigridOptions().sweeps) {
   MultigridOptions o;
   o.threads = threads;
+  o.sweeps = sweeps;
   MultigridSolver<T> mg(o);
   mg.init(grid, a);
   mg.update(a);
   const Eigen::Index n = a.rows();
-  const typename MultigridSolver<T>::Matrix b = test::randomBlock(n, 3).cast<T>();
-  typename MultigridSolver<T>::Matrix x = MultigridSolver<T>::Matrix::Zero(n, 3);
+  const typename MultigridSolver<T>::Matrix b = test::randomBlock(n, channels).cast<T>();
+  typename MultigridSolver<T>::Matrix x = MultigridSolver<T>::Matrix::Zero(n, channels);
   const PhaseTimes before = mg.cycleTimes();
   for (auto _ : state) mg.cycle(b, x);
   PhaseTimes total = mg.cycleTimes();
@@ -139,6 +140,14 @@ template <typename T>
 void BM_VCycleSpot(benchmark::State& state) {
   const SpotProblem& p = spot(static_cast<int>(state.range(0)));
   runCycles<T>(state, p.domain->grid(), p.a, static_cast<int>(state.range(1)));
+}
+
+/// One single-channel V-cycle with 2 sweeps on spot's atlas, as each system of an interactive
+/// geodesic update (kInteractiveSweeps); arg: size; 2 threads.
+template <typename T>
+void BM_VCycleSpotScalar(benchmark::State& state) {
+  const SpotProblem& p = spot(static_cast<int>(state.range(0)));
+  runCycles<T>(state, p.domain->grid(), p.a, 2, 1, 2);
 }
 
 /// Read spot -> texel domain with operators -> multigrid init + update: ready to cycle.
@@ -196,6 +205,7 @@ BENCHMARK(BM_VCycle<float>)->ArgsProduct({{1024, 2048}, {1, 2}})->Unit(benchmark
 BENCHMARK(BM_VCycle<double>)->ArgsProduct({{1024, 2048}, {1, 2}})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_VCycleSpot<float>)->ArgsProduct({{1024, 2048}, {2}})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_VCycleSpot<double>)->ArgsProduct({{1024, 2048}, {2}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_VCycleSpotScalar<float>)->Arg(1024)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SpotInitToReady)->Arg(2048)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_MultigridInit)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_MultigridUpdate)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->Iterations(2);

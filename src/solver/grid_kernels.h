@@ -15,12 +15,14 @@
 
 namespace texgrad::detail {
 
-/// The hot row kernels are compiled twice, for x86-64-v3 (AVX2 + FMA: 8 floats per vector) and
-/// the baseline, and the loader picks the one the CPU runs (GCC/Clang function multiversioning).
-/// (ifunc: needs glibc; off under AddressSanitizer, whose build tests the baseline path).
+/// The hot row kernels are compiled three times, for x86-64-v4 (AVX-512: 16 floats per vector),
+/// x86-64-v3 (AVX2 + FMA: 8) and the baseline, and the loader picks the best one the CPU runs
+/// (GCC/Clang function multiversioning; ifunc: needs glibc; off under AddressSanitizer, whose
+/// build tests the baseline path).
 #if defined(__x86_64__) && defined(__GLIBC__) && (defined(__GNUC__) || defined(__clang__)) && \
     !defined(__SANITIZE_ADDRESS__)
-#define TEXGRAD_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#define TEXGRAD_SIMD_CLONES \
+  __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define TEXGRAD_SIMD_CLONES
 #endif

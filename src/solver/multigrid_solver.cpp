@@ -557,7 +557,7 @@ std::string MultigridSolver<Scalar>::summary() const {
   os << "multigrid (" << (sizeof(Scalar) == 4 ? "float" : "double")
      << "): " << m.hierarchy.levelCount() << " levels, " << m.options.sweeps << " sweeps, "
      << m.hierarchy.chartCount() << " charts\n";
-  os << "level  unknowns  interior  boundary   nnz(A)  nnz(A_bb)   slots\n";
+  os << "level  unknowns  interior  boundary   nnz(A)  nnz(A_bb)  nnz(L_bb)   slots\n";
   for (int l = 0; l < m.hierarchy.levelCount(); ++l) {
     const GridLevel& g = m.hierarchy.level(l);
     const auto& sys = m.levels[static_cast<size_t>(l)].sys;
@@ -569,6 +569,9 @@ std::string MultigridSolver<Scalar>::summary() const {
       os << std::setw(10) << sys.interiorCount() << std::setw(10) << sys.boundaryCount();
     os << std::setw(9) << m.nonZeros[static_cast<size_t>(l)] << std::setw(11)
        << (direct && l > 0 ? m.nonZeros[static_cast<size_t>(l)] : sys.boundaryNonZeros)
+       << std::setw(11)
+       << (direct ? m.coarseSolver.stats().factorNonZeros
+                  : sys.boundarySolver.stats().factorNonZeros)
        << std::setw(8) << g.slotCount << "\n";
   }
   return os.str();
