@@ -251,10 +251,6 @@ void addGeodesicCommand(CLI::App& app) {
       ->check(CLI::IsMember({"average", "neumann"}));
   addWeldToleranceOption(cmd, args->weldTolerance);
   addSolverOptions(cmd, args->solver, GeodesicOptions().solver);
-  cmd->add_option("--distance-sweeps", args->options.distanceSweeps,
-                  "Gauss-Seidel sweeps per level for the distance system only; 0 = --sweeps")
-      ->default_val(0)
-      ->check(CLI::Range(0, 100));
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runGeodesic(*args); }); });
 }

@@ -53,13 +53,6 @@ std::pair<double, double> eigenvalues(const Eigen::Matrix2d& m) {
   return {mean - radius, mean + radius};
 }
 
-/// The solver settings of the distance system: options.solver with its own sweep count.
-SolverSettings distanceSettings(const GeodesicOptions& options) {
-  SolverSettings settings = options.solver;
-  if (options.distanceSweeps > 0) settings.multigrid.sweeps = options.distanceSweeps;
-  return settings;
-}
-
 }  // namespace
 
 GeodesicOffset parseGeodesicOffset(const std::string& text) {
@@ -87,16 +80,12 @@ void GeodesicOptions::validate() const {
   if (!(alpha > 0.0) || !std::isfinite(alpha))
     throw InvalidInputError("geodesic alpha must be a positive finite number, got " +
                             std::to_string(alpha));
-  if (distanceSweeps < 0 || distanceSweeps > 100)
-    throw InvalidInputError("geodesic distanceSweeps is " + std::to_string(distanceSweeps) +
-                            "; expected 0 (same as the solver's sweeps) to 100");
   solver.validate();
 }
 
 GeodesicOptions GeodesicOptions::interactive() {
   GeodesicOptions options;
   options.solver.multigrid.sweeps = kInteractiveSweeps;
-  options.distanceSweeps = kInteractiveDistanceSweeps;
   return options;
 }
 
@@ -369,7 +358,7 @@ GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions&
         return options;
       }()),
       diffusionSolver_(domain.grid(), options.solver),
-      distanceSolver_(domain.grid(), distanceSettings(options)) {
+      distanceSolver_(domain.grid(), options.solver) {
   const auto start = Clock::now();
   const TexelOperators& ops = domain.operators();
   const double area = ops.report().metric.surfaceArea;

@@ -7,7 +7,6 @@
 #include <array>
 #include <cmath>
 #include <iostream>
-#include <utility>
 #include <vector>
 
 #include "shared_meshes.h"
@@ -245,33 +244,6 @@ TEST(Geodesic, SourcesResolveAndBadInputIsRefused) {
   GeodesicOptions bad;
   bad.alpha = -1.0;
   EXPECT_THROW((GeodesicSolver{domain, bad}), InvalidInputError);
-  for (int sweeps : {-1, 101}) {
-    GeodesicOptions badSweeps;
-    badSweeps.distanceSweeps = sweeps;
-    EXPECT_THROW((GeodesicSolver{domain, badSweeps}), InvalidInputError);
-  }
-}
-
-TEST(Geodesic, DistanceSweepsApplyToTheDistanceSystemOnly) {
-  // One update with 1 and with 3 distance sweeps: the heat (diffusion system) is the same bit for
-  // bit, the distances are not; with 0 the distance system takes the solver's sweeps.
-  const TexelDomain domain(procedural::cubeSphere(8), 256, 256);
-  const GeodesicSource source = GeodesicSource::atPoint({0.3, 0.5, 0.8});
-  auto oneUpdate = [&](int distanceSweeps) {
-    GeodesicOptions options;
-    options.solver.multigrid.sweeps = 3;
-    options.distanceSweeps = distanceSweeps;
-    GeodesicSolver solver(domain, options);
-    solver.setSource(source);
-    solver.update();
-    return std::make_pair(Eigen::VectorXd(solver.diffused().col(0)), solver.distances());
-  };
-  const auto [heat1, distance1] = oneUpdate(1);
-  const auto [heat3, distance3] = oneUpdate(3);
-  const auto [heat0, distance0] = oneUpdate(0);
-  EXPECT_EQ((heat1 - heat3).cwiseAbs().maxCoeff(), 0.0);
-  EXPECT_GT((distance1 - distance3).cwiseAbs().maxCoeff(), 1e-6);
-  EXPECT_EQ((distance0 - distance3).cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST(Geodesic, OffsetsAndAlphaUpdates) {

@@ -64,13 +64,9 @@ struct GeodesicOptions {
   GeodesicBoundary boundary = GeodesicBoundary::Average;
   /// Solver for both systems; `cycles` V-cycles (or one direct solve) per system in solve().
   SolverSettings solver;
-  /// Gauss–Seidel sweeps per level in the distance system's V-cycles (Eq. 6); 0 uses
-  /// solver.multigrid.sweeps, as the diffusion system does.
-  int distanceSweeps = 0;
   /// Throws InvalidInputError naming the first bad field.
   void validate() const;
-  /// Defaults for frame-by-frame GeodesicSolver::update(): kInteractiveSweeps sweeps per level
-  /// on the diffusion system, kInteractiveDistanceSweeps on the distance system.
+  /// Defaults for frame-by-frame GeodesicSolver::update(): kInteractiveSweeps sweeps per level.
   static GeodesicOptions interactive();
 };
 
@@ -79,11 +75,6 @@ struct GeodesicOptions {
 /// error per update (spot 1024²: 8% more updates/s; RMS error after 3 updates 6.2e-4 of the
 /// largest distance against 5.3e-4 with n = 3, the same ~1e-4 from the 6th update on).
 constexpr int kInteractiveSweeps = 2;
-/// Sweeps per level of the distance system in interactive updates. The distance error after a
-/// few updates is set mostly by the diffusion's (spot 1024², RMS after 3 updates relative to the
-/// largest distance, sweeps diffusion / distance: 2 / 2 6.2e-4, 2 / 1 7.5e-4, 1 / 2 8.9e-4,
-/// 1 / 1 1.03e-3), so the distance system gets one sweep.
-constexpr int kInteractiveDistanceSweeps = 1;
 
 /// Wall-clock seconds per stage of the heat method.
 struct GeodesicTimings {
