@@ -74,9 +74,10 @@ TEST(Seams, ConstantTextureStaysConstant) {
   for (float v : r.image.pixels) ASSERT_NEAR(v, 0.375f, 1e-6f);
 }
 
-class SharedSeams : public ::testing::TestWithParam<test::SharedMesh> {};
+// Full-size shared meshes: *Slow, so only the Release pass runs it (scripts/test.sh).
+class SharedSeamsSlow : public ::testing::TestWithParam<test::SharedMesh> {};
 
-TEST_P(SharedSeams, JumpFallsAtLeastFiveFoldOnTheRealTexture) {
+TEST_P(SharedSeamsSlow, JumpFallsAtLeastFiveFoldOnTheRealTexture) {
   const test::SharedMesh& s = GetParam();
   const Image texture = test::textureAtMost(readImage(test::sharedData() / s.texture), 1024);
   const TexelDomain domain(readMesh(test::sharedData() / s.obj), texture.width, texture.height);
@@ -93,7 +94,7 @@ TEST_P(SharedSeams, JumpFallsAtLeastFiveFoldOnTheRealTexture) {
   EXPECT_LE(after, before / 5.0);
 }
 
-INSTANTIATE_TEST_SUITE_P(AllMeshes, SharedSeams, ::testing::ValuesIn(test::sharedMeshes()),
+INSTANTIATE_TEST_SUITE_P(AllMeshes, SharedSeamsSlow, ::testing::ValuesIn(test::sharedMeshes()),
                          test::sharedMeshName);
 
 }  // namespace
