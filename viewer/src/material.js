@@ -47,8 +47,9 @@ const fragmentShader = /* glsl */ `
     gl_FragColor = vec4(colour * light, 1.0);
   }`;
 
-/// Material for a width x height texture; `size` (model units) scales the isoline spacing.
-export function surfaceMaterial(width, height, size) {
+/// Material for a width x height texture; `size` (model units) scales the isoline spacing; `side`
+/// says which faces to draw (main.js visibleSide).
+export function surfaceMaterial(width, height, size, side = THREE.DoubleSide) {
   const material = new THREE.ShaderMaterial({
     uniforms: {
       map: { value: null },
@@ -59,7 +60,7 @@ export function surfaceMaterial(width, height, size) {
     },
     vertexShader,
     fragmentShader,
-    side: THREE.DoubleSide,
+    side,
   });
   // One texture per format; show() points it at the frame's bytes (no copy, no conversion) and
   // WebGL uploads them on the next render.
