@@ -48,7 +48,7 @@ const fragmentShader = /* glsl */ `
   }`;
 
 /// Material for a width x height texture; `size` (model units) scales the isoline spacing; `side`
-/// says which faces to draw (main.js visibleSide).
+/// says which faces to draw (visible_side.js).
 export function surfaceMaterial(width, height, size, side = THREE.DoubleSide) {
   const material = new THREE.ShaderMaterial({
     uniforms: {
