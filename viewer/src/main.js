@@ -132,15 +132,33 @@ async function main() {
   scene.add(model);
 
   // Frames arrive faster than they can be shown at times: keep only the latest and upload it on
-  // the next animation frame. The scene is rendered only when something changed (a frame, the
-  // camera, the size), so an idle page leaves the CPU to the solver.
+  // the next animation frame. An animation frame is asked for only when something changed (a
+  // frame, the camera, the size, a setting), so an idle page leaves the CPU to the solver.
   const stats = { frames: 0, shown: 0, frameTimes: [], shownTimes: [], last: null,
                   serverState: null, lastSource: null };
-  let latest = null, renderWanted = true;
-  const requestRender = () => { renderWanted = true; };
+  let latest = null, renderScheduled = false;
+  const forget = (times, now) => {
+    while (times.length && times[0] < now - 1000) times.shift();
+  };
   const recent = (times, now) => {
     times.push(now);
-    while (times.length && times[0] < now - 1000) times.shift();
+    forget(times, now);
+  };
+  const draw = () => {
+    renderScheduled = false;
+    if (latest) {
+      if (surface.show(latest)) {
+        stats.shown += 1;
+        recent(stats.shownTimes, performance.now());
+      }
+      latest = null;
+    }
+    renderer.render(scene, camera);
+  };
+  const requestRender = () => {
+    if (renderScheduled) return;
+    renderScheduled = true;
+    requestAnimationFrame(draw);
   };
   const onFrame = (buffer) => {
     latest = decodeFrame(buffer);
@@ -149,6 +167,7 @@ async function main() {
     stats.lastTexels = latest.texels;
     if (stats.onFrame) stats.onFrame(latest.header);
     recent(stats.frameTimes, performance.now());
+    requestRender();
   };
   const connection = new Connection(
       `${location.protocol === "https:" ? "wss" : "ws"}://${location.host}${withToken("/ws")}`,
@@ -285,15 +304,26 @@ async function main() {
   });
 
   // Updates per second shown on the model (frames received: stats.frameTimes).
-  const pageRate = () => stats.shownTimes.length;
+  const pageRate = () => {
+    forget(stats.shownTimes, performance.now());
+    return stats.shownTimes.length;
+  };
+  const receivedRate = () => {
+    forget(stats.frameTimes, performance.now());
+    return stats.frameTimes.length;
+  };
+  // Replacing a text, even by the same one, makes the browser paint the panel again.
+  const setText = (id, text) => {
+    if ($(id).textContent !== text) $(id).textContent = text;
+  };
   let stateAsked = false;
   const showStitchStatus = () => {
     const state = stitch.solving
       ? `solving... ${((performance.now() - stitch.started) / 1000).toFixed(1)} s`
       : `solved${stitch.seconds === null ? "" : ` in ${stitch.seconds.toFixed(2)} s`}`;
-    $("stats").textContent = `${state}\n` +
+    setText("stats", `${state}\n` +
         (stitch.residual === null ? "" : `residual ${stitch.residual.toExponential(2)}\n`) +
-        `showing ${stitch.stitched ? "stitched" : "composite"}`;
+        `showing ${stitch.stitched ? "stitched" : "composite"}`);
   };
   setInterval(async () => {
     if (info.app === "stitch") showStitchStatus();
@@ -308,12 +338,12 @@ async function main() {
       if (s.error) showMessage(s.error);
       return showStitchStatus();
     }
-    $("stats").textContent =
-        `updates/s page ${pageRate()} (received ${stats.frameTimes.length})  ` +
+    setText("stats",
+        `updates/s page ${pageRate()} (received ${receivedRate()})  ` +
         `server ${s.updatesPerSecond.toFixed(1)}\n` +
         `iteration ${s.iteration}  ${s.running ? "running" : s.paused ? "paused" : "settled"}\n` +
         `residual ${s.residual.toExponential(2)}\n` +
-        (h && h.format === 2 ? `max distance ${h.scale.toPrecision(4)}\n` : "");
+        (h && h.format === 2 ? `max distance ${h.scale.toPrecision(4)}\n` : ""));
   }, 500);
 
   window.addEventListener("resize", () => {
@@ -322,19 +352,7 @@ async function main() {
     renderer.setSize(window.innerWidth, window.innerHeight);
     requestRender();
   });
-  renderer.setAnimationLoop(() => {
-    if (latest) {
-      if (surface.show(latest)) {
-        stats.shown += 1;
-        recent(stats.shownTimes, performance.now());
-      }
-      latest = null;
-      renderWanted = true;
-    }
-    if (!renderWanted) return;
-    renderWanted = false;
-    renderer.render(scene, camera);
-  });
+  requestRender();
 
   // Hooks for the end-to-end tests (tests/e2e): picking, raw requests and counters.
   window.texgrad = {
