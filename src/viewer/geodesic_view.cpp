@@ -35,7 +35,8 @@ class GeodesicView final : public ViewerApp {
   GeodesicView(const TexelDomain& domain, const Image& texture, const ViewerAppOptions& options)
       : domain_(domain),
         solver_(domain, geodesicOptions(options)),
-        distances_(texture.width, texture.height, 1, PixelFormat::Float) {}
+        distances_(texture.width, texture.height, 1, PixelFormat::Float),
+        pixelOfUnknown_(pixelsOfUnknowns(domain.grid(), texture.width)) {}
 
   std::string name() const override { return "geodesic"; }
 
@@ -85,15 +86,13 @@ class GeodesicView final : public ViewerApp {
     tbb::parallel_for(tbb::blocked_range<int>(0, grid.unknownCount(), kUnknownsPerTask),
                       [&](const tbb::blocked_range<int>& range) {
                         for (int u = range.begin(); u != range.end(); ++u) {
-                          const int t = grid.texelOfUnknown[u];
-                          const int x = t % grid.nx, y = t / grid.nx;
-                          if (!grid.inImage(x, y)) continue;
+                          const int32_t pixel = pixelOfUnknown_[u];
+                          if (pixel < 0) continue;
                           if (!std::isfinite(d[u])) continue;  // unreachable: no value
+                          // Rounded to nearest (the value is clamped to be >= 0 first).
                           const auto code = static_cast<uint16_t>(
-                              std::lround(std::clamp(d[u] * toCode, 0.0, double{kMaxCode})));
-                          uint8_t* out = texels.data() +
-                                         2 * (static_cast<size_t>(y + grid.y0) * distances_.width +
-                                              static_cast<size_t>(x + grid.x0));
+                              std::clamp(d[u] * toCode, 0.0, double{kMaxCode}) + 0.5);
+                          uint8_t* out = texels.data() + 2 * static_cast<size_t>(pixel);
                           out[0] = static_cast<uint8_t>(code & 0xFFu);
                           out[1] = static_cast<uint8_t>(code >> 8);
                         }
@@ -125,10 +124,8 @@ class GeodesicView final : public ViewerApp {
         [&](const tbb::blocked_range<int>& range, Sums acc) {
           for (int u = range.begin(); u != range.end(); ++u) {
             if (std::isfinite(d[u])) acc.largest = std::max(acc.largest, d[u]);
-            const int t = grid.texelOfUnknown[u];
-            const int x = t % grid.nx, y = t / grid.nx;
-            if (!grid.inImage(x, y)) continue;
-            float& pixel = distances_.at(x + grid.x0, y + grid.y0);
+            if (pixelOfUnknown_[u] < 0) continue;
+            float& pixel = distances_.pixels[static_cast<size_t>(pixelOfUnknown_[u])];
             if (std::isfinite(d[u]) && std::isfinite(pixel)) {
               acc.squaredChange += (d[u] - pixel) * (d[u] - pixel);
               ++acc.count;
@@ -144,6 +141,19 @@ class GeodesicView final : public ViewerApp {
     return {sums.largest, sums.squaredChange, std::max<int64_t>(sums.count, 1)};
   }
 
+  /// Per unknown: its pixel (row * width + column) in an image of `width` columns, or -1 if its
+  /// texel lies outside the image. Saves the per-frame divisions by the grid width.
+  static std::vector<int32_t> pixelsOfUnknowns(const TexelGrid& grid, int width) {
+    std::vector<int32_t> pixels(static_cast<size_t>(grid.unknownCount()));
+    for (int u = 0; u < grid.unknownCount(); ++u) {
+      const int t = grid.texelOfUnknown[u];
+      const int x = t % grid.nx, y = t / grid.nx;
+      pixels[static_cast<size_t>(u)] =
+          grid.inImage(x, y) ? (y + grid.y0) * width + (x + grid.x0) : -1;
+    }
+    return pixels;
+  }
+
   static GeodesicOptions geodesicOptions(const ViewerAppOptions& options) {
     GeodesicOptions g = GeodesicOptions::interactive();
     g.alpha = options.geodesicAlpha;
@@ -154,6 +164,7 @@ class GeodesicView final : public ViewerApp {
   GeodesicSolver solver_;
   std::vector<GeodesicSource> sources_;
   Image distances_;  ///< distance per texel (model units), 0 where inactive
+  std::vector<int32_t> pixelOfUnknown_;  ///< pixelsOfUnknowns of the grid and distances_
   double maxDistance_ = 0.0;
   double residual_ = 0.0;       ///< last measured (every kResidualEvery steps)
   int stepsSinceResidual_ = 0;  ///< since the last change of sources
