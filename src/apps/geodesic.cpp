@@ -367,6 +367,7 @@ GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions&
   gradients_ = std::make_unique<Gradients>(domain, options_.solver.multigrid.threads);
   a1_ = options_.alpha * ops.mass() + ops.stiffness();
   a2_ = ops.stiffness() + kDistanceScreening * ops.mass();
+  labelComponents();
   diffusionSolver_.initAndUpdate(a1_);
   distanceSolver_.initAndUpdate(a2_);
   if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
@@ -478,23 +479,35 @@ void GeodesicSolver::setSources(std::span<const GeodesicSource> sources) {
   resetIterates();
 }
 
-void GeodesicSolver::findReachable() {
-  reachable_.assign(static_cast<size_t>(domain_->unknowns()), 0);
-  std::vector<int32_t> queue;
-  for (const auto& weights : sourceWeights_)
-    for (const fem::TexelWeight& w : weights)
-      if (!reachable_[static_cast<size_t>(w.unknown)]) {
-        reachable_[static_cast<size_t>(w.unknown)] = 1;
-        queue.push_back(w.unknown);
-      }
+void GeodesicSolver::labelComponents() {
+  const int n = static_cast<int>(a1_.outerSize());
+  component_.assign(static_cast<size_t>(n), -1);
+  componentCount_ = 0;
   const int* outer = a1_.outerIndexPtr();
   const int* inner = a1_.innerIndexPtr();
-  for (size_t head = 0; head < queue.size(); ++head)
-    for (int k = outer[queue[head]]; k < outer[queue[head] + 1]; ++k)
-      if (!reachable_[static_cast<size_t>(inner[k])]) {
-        reachable_[static_cast<size_t>(inner[k])] = 1;
-        queue.push_back(inner[k]);
-      }
+  std::vector<int32_t> queue;
+  for (int seed = 0; seed < n; ++seed) {
+    if (component_[static_cast<size_t>(seed)] >= 0) continue;
+    component_[static_cast<size_t>(seed)] = componentCount_;
+    queue.assign(1, seed);
+    for (size_t head = 0; head < queue.size(); ++head)
+      for (int k = outer[queue[head]]; k < outer[queue[head] + 1]; ++k)
+        if (component_[static_cast<size_t>(inner[k])] < 0) {
+          component_[static_cast<size_t>(inner[k])] = componentCount_;
+          queue.push_back(inner[k]);
+        }
+    ++componentCount_;
+  }
+}
+
+void GeodesicSolver::findReachable() {
+  std::vector<uint8_t> reached(static_cast<size_t>(componentCount_), 0);
+  for (const auto& weights : sourceWeights_)
+    for (const fem::TexelWeight& w : weights)
+      reached[static_cast<size_t>(component_[static_cast<size_t>(w.unknown)])] = 1;
+  reachable_.resize(component_.size());
+  for (size_t u = 0; u < component_.size(); ++u)
+    reachable_[u] = reached[static_cast<size_t>(component_[u])];
 }
 
 void GeodesicSolver::collectNearField() {

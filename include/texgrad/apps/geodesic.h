@@ -183,6 +183,9 @@ class GeodesicSolver {
     double distance = 0.0;
   };
   void collectNearField();
+  /// Labels the connected components of the support graph of A1 (component_).
+  void labelComponents();
+  /// Marks the unknowns in a component that holds a source (reachable_).
   void findReachable();
   void buildDirichlet();
   void updateDirichlet();
@@ -205,6 +208,8 @@ class GeodesicSolver {
   std::vector<std::vector<fem::TexelWeight>> sourceWeights_;  ///< phi_t(p_s) per source
   std::vector<NearFieldTexel> nearField_;                     ///< sorted by source
   std::vector<uint8_t> reachable_;                      ///< per unknown: connected to a source
+  std::vector<int32_t> component_;  ///< per unknown: its component of A1's support graph
+  int32_t componentCount_ = 0;
   std::vector<int32_t> vertexFaceBegin_, vertexFaces_;  ///< faces around each 3-D vertex (CSR)
   /// n x 1 blocks for SystemSolver: impulse b (and b with Dirichlet rows zeroed), Neumann and
   /// Dirichlet diffusions, the heat u used for the gradient, divergence, potential y.
