@@ -34,8 +34,8 @@ struct MeshCase {
 };
 
 /// Names of the cases of allMeshes(), in order. Test names are made when the tests register, in
-/// every process of test_io: taken from here, no mesh is built then (ProceduralMesh checks that
-/// the two lists agree).
+/// every process of test_io: taken from here, no mesh is built then
+/// (Procedural.EveryCaseHasItsName checks that the two lists agree).
 constexpr std::array<std::string_view, 9> kMeshNames = {
     "square", "mirrored_square", "two_charts", "two_charts_odd", "cube",
     "cube1",  "cylinder",        "sphere",     "torus"};
