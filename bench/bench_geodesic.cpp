@@ -1,6 +1,7 @@
 // Benchmarks for the geodesic app (paper Sec. 7.3): interactive heat-method updates (one V-cycle on
 // each system plus the normalised-gradient divergence) on spot at 1024^2 with 2 threads.
 #include <benchmark/benchmark.h>
+#include <time.h>
 
 #include <filesystem>
 #include <map>
@@ -24,6 +25,14 @@ const TexelDomain& spotDomain() {
     return std::make_unique<TexelDomain>(readMesh(obj), kResolution, kResolution);
   }();
   return *domain;
+}
+
+/// CPU time of the whole process (all threads, spinning workers included): on 2 cores shared with
+/// the browser, the viewer's update rate is bounded by CPU per update rather than wall time.
+double processCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
 GeodesicOptions benchOptions() {
@@ -51,11 +60,14 @@ GeodesicSolver& interactiveSolver(int sweeps) {
 /// level, kInteractiveSweeps (what the viewer runs) and the paper's 3 as the baseline.
 void BM_GeodesicInteractiveUpdate(benchmark::State& state) {
   GeodesicSolver& solver = interactiveSolver(static_cast<int>(state.range(0)));
+  const double cpuStart = processCpuSeconds();
   for (auto _ : state) {
     solver.update();
     benchmark::DoNotOptimize(solver.distances().data());
   }
   state.SetItemsProcessed(state.iterations());
+  state.counters["process_cpu_ms"] =
+      1e3 * (processCpuSeconds() - cpuStart) / static_cast<double>(state.iterations());
   state.counters["unknowns"] = spotDomain().unknowns();
   state.counters["diffusion_ms"] = 1e3 * solver.timings().diffusion;
   state.counters["divergence_ms"] = 1e3 * solver.timings().divergence;

@@ -1,0 +1,64 @@
+// Apps (private): the one-point quadrature samples of the texel-basis gradients behind the heat
+// method's normalised-gradient divergence (paper Sec. 7.3), streamed once per geodesic update.
+#pragma once
+
+#include <tbb/task_arena.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "texgrad/apps/geodesic.h"
+
+namespace texgrad {
+
+/// One-point quadrature samples of the texel-basis gradients (paper Sec. 7.3): one per plain
+/// piece T ∩ cell (at its centroid) and one per quadratic element of seam pieces (at its
+/// centroid). div_h(omega)_t = sum_q weight_q dphi_t(q) . X_q with X_q = g^-1 omega_q.
+struct GeodesicSolver::Gradients {
+  /// Piece with exactly bilinear basis: four cell texels, centroid in cell-local coordinates.
+  /// Compact (the divergence streams every sample once per update); the metric comes from the
+  /// face.
+  struct CellSample {
+    std::array<int32_t, 4> texels;  ///< order (a,b), (a+1,b), (a,b+1), (a+1,b+1); -1 if absent
+    int32_t cellX;                  ///< a
+    float fx, fy;                   ///< centroid, cell-local
+    float area;                     ///< area in texel units
+    int32_t face;                   ///< index into faceMetrics
+  };
+  /// Per face: sqrt|g| and g^-1.
+  struct FaceMetric {
+    double root = 0.0, hxx = 0.0, hxy = 0.0, hyy = 0.0;
+  };
+  /// Quadratic element of a seam piece: gradients of its local texels at the centroid.
+  struct SeamSample {
+    int32_t begin, end;  ///< range in seamTexels / seamGradients
+    double weight, hxx, hxy, hyy;
+  };
+
+  std::vector<CellSample> cells;  ///< sorted by cell row, then cell column (stable)
+  std::vector<FaceMetric> faceMetrics;
+  std::vector<int64_t> rowBegin;  ///< cells of row b: [rowBegin[b + 1], rowBegin[b + 2]), b >= -1
+  std::vector<SeamSample> seams;
+  std::vector<int32_t> seamTexels;
+  std::vector<Eigen::Vector2d> seamGradients;
+  std::vector<Eigen::Vector2d> seamDirections;  ///< per seam sample: X of the last divergence
+  std::vector<int32_t> seamTargets;             ///< the distinct texels of seamTexels, ascending
+  std::vector<int32_t> seamTargetOfEntry;  ///< per seam entry: index of its texel in seamTargets
+  std::vector<double> seamSums;            ///< per seam target: sum of the last divergence
+  tbb::task_arena arena;
+
+  /// Samples of `domain`, built and later summed on `threads` threads (0: all).
+  Gradients(const TexelDomain& domain, int threads);
+
+  void build(const TexelDomain& domain);
+  /// Sets div (n values) to div_h(-du/|du|) of the function with coefficients u (one-point
+  /// quadrature).
+  void divergence(const double* u, double* div, Eigen::Index n);
+  /// The cell-sample part of divergence for the samples [first, last) of one cell row.
+  static void addRowDivergence(const CellSample* first, const CellSample* last,
+                               const FaceMetric* metrics, const double* u, double* div);
+};
+
+}  // namespace texgrad
