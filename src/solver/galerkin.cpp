@@ -40,6 +40,7 @@ struct Accumulator {
 
 struct Scratch {
   Accumulator fine, coarse;
+  std::vector<std::pair<int, double>> column;  ///< (fine row, weight) of one column of P
 };
 
 /// One task's columns of the result, in compressed form with a local column pointer.
@@ -49,11 +50,11 @@ struct Block {
   std::vector<double> values;
 };
 
-}  // namespace
-
-Sparse galerkinProduct(const Sparse& a, const Sparse& p) {
-  const RowMajor pRows = p;  // row r of P: the coarse columns fine texel r interpolates from
-  const Eigen::Index nc = p.cols();
+/// Pᵀ A P with P given by its columns and rows: children(j, out) sets out to the (fine row,
+/// weight) entries of column j by increasing row, parents(r, f) calls f(coarse column, weight)
+/// for the entries of row r by increasing column.
+template <typename Children, typename Parents>
+Sparse galerkinColumns(const Sparse& a, Eigen::Index nc, Children children, Parents parents) {
   const Eigen::Index tasks = (nc + kColumnsPerTask - 1) / kColumnsPerTask;
   std::vector<Block> blocks(static_cast<size_t>(tasks));
   tbb::enumerable_thread_specific<Scratch> scratch;
@@ -66,13 +67,14 @@ Sparse galerkinProduct(const Sparse& a, const Sparse& p) {
     for (Eigen::Index j = first; j < last; ++j) {
       s.fine.touched.clear();
       s.coarse.touched.clear();
-      for (Sparse::InnerIterator pi(p, j); pi; ++pi)  // (A P)_{:, j}
-        for (Sparse::InnerIterator ai(a, pi.row()); ai; ++ai)
-          s.fine.add(static_cast<int>(ai.row()), ai.value() * pi.value(), j);
+      children(j, s.column);
+      for (const auto& [row, weight] : s.column)  // (A P)_{:, j}
+        for (Sparse::InnerIterator ai(a, row); ai; ++ai)
+          s.fine.add(static_cast<int>(ai.row()), ai.value() * weight, j);
       for (int r : s.fine.touched)  // (Pᵀ A P)_{:, j}
-        for (RowMajor::InnerIterator pr(pRows, r); pr; ++pr)
-          s.coarse.add(static_cast<int>(pr.col()),
-                       pr.value() * s.fine.value[static_cast<size_t>(r)], j);
+        parents(r, [&](int k, double weight) {
+          s.coarse.add(k, weight * s.fine.value[static_cast<size_t>(r)], j);
+        });
       std::sort(s.coarse.touched.begin(), s.coarse.touched.end());
       block.count.push_back(static_cast<int>(s.coarse.touched.size()));
       for (int k : s.coarse.touched) {
@@ -100,6 +102,56 @@ Sparse galerkinProduct(const Sparse& a, const Sparse& p) {
     std::copy(block.values.begin(), block.values.end(), c.valuePtr() + offset);
   });
   return c;
+}
+
+}  // namespace
+
+Sparse galerkinProduct(const Sparse& a, const Sparse& p) {
+  const RowMajor pRows = p;  // row r of P: the coarse columns fine texel r interpolates from
+  return galerkinColumns(
+      a, p.cols(),
+      [&](Eigen::Index j, std::vector<std::pair<int, double>>& out) {
+        out.clear();
+        for (Sparse::InnerIterator pi(p, j); pi; ++pi)
+          out.emplace_back(static_cast<int>(pi.row()), pi.value());
+      },
+      [&](int r, const auto& add) {
+        for (RowMajor::InnerIterator pr(pRows, r); pr; ++pr)
+          add(static_cast<int>(pr.col()), pr.value());
+      });
+}
+
+Sparse galerkinProduct(const Sparse& a, const GridLevel& fine, const GridLevel& coarse) {
+  return galerkinColumns(
+      a, coarse.unknownCount(),
+      [&](Eigen::Index j, std::vector<std::pair<int, double>>& out) {
+        // The fine texels within one lattice step of coarse texel j's position, in its chart.
+        out.clear();
+        const size_t sj = static_cast<size_t>(j);
+        const GridBox& box = fine.boxes[static_cast<size_t>(
+            fine.boxOfChart[static_cast<size_t>(coarse.chartOfUnknown[sj])])];
+        const int cx = 2 * coarse.xOfUnknown[sj], cy = 2 * coarse.yOfUnknown[sj];
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            if (!box.contains(cx + dx, cy + dy)) continue;
+            const int r = fine.unknownOfSlot[static_cast<size_t>(box.slot(cx + dx, cy + dy))];
+            if (r >= 0) out.emplace_back(r, (dx == 0 ? 1.0 : 0.5) * (dy == 0 ? 1.0 : 0.5));
+          }
+        std::sort(out.begin(), out.end());  // by fine index, as in P's column, for any numbering
+      },
+      [&](int r, const auto& add) {
+        const size_t sr = static_cast<size_t>(r);
+        const GridBox& box = coarse.boxes[static_cast<size_t>(
+            coarse.boxOfChart[static_cast<size_t>(fine.chartOfUnknown[sr])])];
+        const LatticeParents px = latticeParents(fine.xOfUnknown[sr]),
+                             py = latticeParents(fine.yOfUnknown[sr]);
+        for (int jy = 0; jy < py.count; ++jy)  // slot order = increasing coarse index
+          for (int ix = 0; ix < px.count; ++ix) {
+            const size_t x = static_cast<size_t>(ix), y = static_cast<size_t>(jy);
+            add(coarse.unknownOfSlot[static_cast<size_t>(box.slot(px.index[x], py.index[y]))],
+                px.weight[x] * py.weight[y]);
+          }
+      });
 }
 
 }  // namespace texgrad

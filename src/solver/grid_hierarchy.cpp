@@ -13,18 +13,6 @@
 namespace texgrad {
 namespace {
 
-/// Coarse parents of a fine lattice coordinate with their bilinear weights (1, or 1/2 twice).
-struct Parents {
-  int count = 0;
-  std::array<int, 2> index{};
-  std::array<double, 2> weight{};
-};
-
-Parents parentsOf(int fine) {
-  if (fine % 2 == 0) return {1, {fine / 2, 0}, {1.0, 0.0}};
-  return {2, {(fine - 1) / 2, (fine + 1) / 2}, {0.5, 0.5}};
-}
-
 /// Lays out boxes given per-chart inclusive content bounds; charts with empty bounds get no box.
 void layoutBoxes(GridLevel& level, const std::vector<std::array<int, 4>>& bounds) {
   level.boxOfChart.assign(bounds.size(), -1);
@@ -99,7 +87,8 @@ GridLevel buildCoarseLevel(const GridLevel& fine) {
     const size_t su = static_cast<size_t>(u);
     const GridBox& box = coarse.boxes[static_cast<size_t>(
         coarse.boxOfChart[static_cast<size_t>(fine.chartOfUnknown[su])])];
-    const Parents px = parentsOf(fine.xOfUnknown[su]), py = parentsOf(fine.yOfUnknown[su]);
+    const LatticeParents px = latticeParents(fine.xOfUnknown[su]),
+                         py = latticeParents(fine.yOfUnknown[su]);
     for (int j = 0; j < py.count; ++j)
       for (int i = 0; i < px.count; ++i)
         used[static_cast<size_t>(box.slot(px.index[static_cast<size_t>(i)],
@@ -137,7 +126,8 @@ Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridL
   for (int u = 0; u < n; ++u) {
     const size_t su = static_cast<size_t>(u);
     start[su + 1] =
-        start[su] + parentsOf(fine.xOfUnknown[su]).count * parentsOf(fine.yOfUnknown[su]).count;
+        start[su] + latticeParents(fine.xOfUnknown[su]).count *
+                        latticeParents(fine.yOfUnknown[su]).count;
   }
   rows.resizeNonZeros(start.back());
   std::copy(start.begin(), start.end(), rows.outerIndexPtr());
@@ -146,7 +136,8 @@ Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridL
       const size_t su = static_cast<size_t>(u);
       const GridBox& box = coarse.boxes[static_cast<size_t>(
           coarse.boxOfChart[static_cast<size_t>(fine.chartOfUnknown[su])])];
-      const Parents px = parentsOf(fine.xOfUnknown[su]), py = parentsOf(fine.yOfUnknown[su]);
+      const LatticeParents px = latticeParents(fine.xOfUnknown[su]),
+                         py = latticeParents(fine.yOfUnknown[su]);
       int k = start[su];
       for (int j = 0; j < py.count; ++j)  // slot order = increasing coarse index
         for (int i = 0; i < px.count; ++i, ++k) {
@@ -187,10 +178,16 @@ GridHierarchy GridHierarchy::build(const TexelGrid& grid, int maxLevels, int min
                                          fine.footprintInterior.end(), [](uint8_t v) { return v; });
     if (fine.unknownCount() < minCoarseUnknowns || !anyInterior) break;
     GridLevel coarse = buildCoarseLevel(fine);
-    h.prolongations_.push_back(buildProlongation(fine, coarse));
     h.levels_.push_back(std::move(coarse));
   }
   return h;
+}
+
+Eigen::SparseMatrix<double> GridHierarchy::prolongation(int l) const {
+  if (l < 0 || l + 1 >= levelCount())
+    throw InvalidInputError("GridHierarchy::prolongation: level " + std::to_string(l) +
+                            " has no coarser level (levels: " + std::to_string(levelCount()) + ")");
+  return buildProlongation(level(l), level(l + 1));
 }
 
 }  // namespace texgrad

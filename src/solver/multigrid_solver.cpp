@@ -123,12 +123,6 @@ struct MultigridSolver<Scalar>::Impl {
 
   int coarsest() const { return hierarchy.levelCount() - 1; }
 
-  /// A^{l+1} = Pᵀ A^l P on all threads.
-  static Eigen::SparseMatrix<double> galerkin(const Eigen::SparseMatrix<double>& a,
-                                              const Eigen::SparseMatrix<double>& p) {
-    return galerkinProduct(a, p);
-  }
-
   void refreshCounters() {
     stats.symbolicAnalyses = coarseSolver.stats().analyses;
     stats.numericFactorizations = coarseSolver.stats().factorizations;
@@ -177,7 +171,7 @@ struct MultigridSolver<Scalar>::Impl {
         if (symbolicPhase) coarseSolver.analyzePattern(*a);
         if (numericPhase) coarseSolver.factorize(*a);
       } else {
-        coarse = galerkin(*a, hierarchy.prolongation(l));
+        coarse = galerkinProduct(*a, grid, hierarchy.level(l + 1));
         a = &coarse;
       }
     }

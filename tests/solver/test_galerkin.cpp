@@ -5,7 +5,9 @@
 #include <cmath>
 #include <random>
 
+#include "synthetic_problem.h"
 #include "texgrad/solver/galerkin.h"
+#include "texgrad/solver/grid_hierarchy.h"
 
 using namespace texgrad;
 
@@ -53,4 +55,26 @@ TEST(Galerkin, KeepsStructuralZerosSoThePatternIgnoresValues) {
   p.setIdentity();
   const Eigen::SparseMatrix<double> c = galerkinProduct(a, p);
   EXPECT_EQ(c.nonZeros(), 4);
+}
+
+TEST(Galerkin, LatticeProlongationMatchesTheStoredOneBitForBit) {
+  // Three charts, several levels: every coarse column sums the same entries in the same order.
+  const test::SyntheticProblem p = test::multiChartProblem(24);
+  const GridHierarchy h = GridHierarchy::build(p.grid, 4, 16);
+  ASSERT_GE(h.levelCount(), 4);
+  Eigen::SparseMatrix<double> a = p.system(3.0);
+  for (int l = 0; l + 1 < h.levelCount(); ++l) {
+    const Eigen::SparseMatrix<double> stored = galerkinProduct(a, h.prolongation(l));
+    const Eigen::SparseMatrix<double> lattice = galerkinProduct(a, h.level(l), h.level(l + 1));
+    ASSERT_EQ(lattice.rows(), stored.rows());
+    ASSERT_EQ(lattice.nonZeros(), stored.nonZeros()) << "level " << l;
+    EXPECT_TRUE(std::equal(stored.outerIndexPtr(), stored.outerIndexPtr() + stored.cols() + 1,
+                           lattice.outerIndexPtr()));
+    EXPECT_TRUE(std::equal(stored.innerIndexPtr(), stored.innerIndexPtr() + stored.nonZeros(),
+                           lattice.innerIndexPtr()));
+    EXPECT_TRUE(std::equal(stored.valuePtr(), stored.valuePtr() + stored.nonZeros(),
+                           lattice.valuePtr()))
+        << "level " << l;
+    a = stored;
+  }
 }

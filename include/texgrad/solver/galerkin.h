@@ -3,6 +3,8 @@
 
 #include <Eigen/SparseCore>
 
+#include "texgrad/solver/grid_hierarchy.h"
+
 namespace texgrad {
 
 /// Pᵀ A P for A (n x n) and P (n x m), column by column without forming A P. The
@@ -10,5 +12,11 @@ namespace texgrad {
 /// patterns of A and P; the result does not depend on the thread count.
 Eigen::SparseMatrix<double> galerkinProduct(const Eigen::SparseMatrix<double>& a,
                                             const Eigen::SparseMatrix<double>& p);
+
+/// Pᵀ A P for the bilinear prolongation P from `coarse` to `fine` (consecutive levels of one
+/// GridHierarchy), computed from the lattice positions without storing P; equal, bit for bit, to
+/// galerkinProduct(a, GridHierarchy::prolongation(l)).
+Eigen::SparseMatrix<double> galerkinProduct(const Eigen::SparseMatrix<double>& a,
+                                            const GridLevel& fine, const GridLevel& coarse);
 
 }  // namespace texgrad

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/SparseCore>
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -51,8 +52,22 @@ struct GridLevel {
   int unknownCount() const { return static_cast<int>(slotOfUnknown.size()); }
 };
 
-/// Per-chart grid hierarchy: levels 0..L and prolongations P^l (n_l x n_{l+1}), bilinear
-/// up-sampling weights 1, 1/2, 1/4 restricted to texels of the same chart (paper §6.1).
+/// Coarse parents of a fine lattice coordinate with their bilinear weights (1, or 1/2 twice).
+struct LatticeParents {
+  int count = 0;
+  std::array<int, 2> index{};
+  std::array<double, 2> weight{};
+};
+
+/// The coarse coordinates whose bilinear hat covers fine coordinate `fine` (paper §6.1).
+inline LatticeParents latticeParents(int fine) {
+  if (fine % 2 == 0) return {1, {fine / 2, 0}, {1.0, 0.0}};
+  return {2, {(fine - 1) / 2, (fine + 1) / 2}, {0.5, 0.5}};
+}
+
+/// Per-chart grid hierarchy: levels 0..L. The prolongations P^l (n_l x n_{l+1}) follow from the
+/// lattice positions: bilinear up-sampling weights 1, 1/2, 1/4 restricted to texels of the same
+/// chart (paper §6.1).
 class GridHierarchy {
  public:
   /// Builds levels 0..L from the texel classes of `grid`, with L <= maxLevels; coarsening stops
@@ -63,16 +78,14 @@ class GridHierarchy {
   int levelCount() const { return static_cast<int>(levels_.size()); }
   /// Level l (0 = finest, the TexelGrid's unknowns).
   const GridLevel& level(int l) const { return levels_[static_cast<size_t>(l)]; }
-  /// Prolongation P^l from level l + 1 to level l, n_l x n_{l+1}; R^l = (P^l)ᵀ.
-  const Eigen::SparseMatrix<double>& prolongation(int l) const {
-    return prolongations_[static_cast<size_t>(l)];
-  }
+  /// Prolongation P^l from level l + 1 to level l, n_l x n_{l+1}; R^l = (P^l)ᵀ. Built on
+  /// each call: the solver applies P from the lattice positions and never stores it.
+  Eigen::SparseMatrix<double> prolongation(int l) const;
   /// Number of charts (boxes at level 0 are indexed by chart).
   int chartCount() const { return chartCount_; }
 
  private:
   std::vector<GridLevel> levels_;
-  std::vector<Eigen::SparseMatrix<double>> prolongations_;
   int chartCount_ = 0;
 };
 
