@@ -100,11 +100,10 @@ GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions&
   if (!(area > 0.0)) throw InvalidInputError("the mesh has zero surface area; no distances exist");
   scale_ = std::sqrt(area);
   gradients_ = std::make_unique<Gradients>(domain, options_.solver.multigrid.threads);
-  a1_ = options_.alpha * ops.mass() + ops.stiffness();
-  a2_ = ops.stiffness() + kDistanceScreening * ops.mass();
+  // A1 and A2 live in their solvers only (SystemSolver::matrix()).
+  diffusionSolver_.initAndUpdate(options_.alpha * ops.mass() + ops.stiffness());
+  distanceSolver_.initAndUpdate(ops.stiffness() + kDistanceScreening * ops.mass());
   labelComponents();
-  diffusionSolver_.initAndUpdate(a1_);
-  distanceSolver_.initAndUpdate(a2_);
   if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
     buildDirichlet();
   const TexturedMesh& mesh = domain.mesh();
@@ -152,19 +151,19 @@ void GeodesicSolver::buildDirichlet() {
   }
   dirichletCount_ = static_cast<int>(std::count(dirichlet_.begin(), dirichlet_.end(), 1));
   dirichletSolver_ = std::make_unique<SystemSolver>(grid, options_.solver);
-  dirichletSolver_->init(a1_);
+  dirichletSolver_->init(diffusionSolver_.matrix());
   updateDirichlet();
 }
 
 void GeodesicSolver::updateDirichlet() {
   // A1 with the rows and columns of held texels reduced to their diagonal: same pattern, SPD.
-  a1Dirichlet_ = a1_;
-  for (int j = 0; j < a1Dirichlet_.outerSize(); ++j)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(a1Dirichlet_, j); it; ++it)
+  Eigen::SparseMatrix<double> a = diffusionSolver_.matrix();
+  for (int j = 0; j < a.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(a, j); it; ++it)
       if ((dirichlet_[static_cast<size_t>(it.row())] || dirichlet_[static_cast<size_t>(j)]) &&
           it.row() != j)
         it.valueRef() = 0.0;
-  dirichletSolver_->update(a1Dirichlet_);
+  dirichletSolver_->update(std::move(a));
 }
 
 void GeodesicSolver::resetIterates() {
@@ -183,8 +182,7 @@ void GeodesicSolver::setAlpha(double alpha) {
   next.validate();
   options_ = next;
   const TexelOperators& ops = domain_->operators();
-  a1_ = options_.alpha * ops.mass() + ops.stiffness();
-  diffusionSolver_.update(a1_);
+  diffusionSolver_.update(options_.alpha * ops.mass() + ops.stiffness());
   if (dirichletSolver_) updateDirichlet();
   resetIterates();
 }
@@ -215,11 +213,12 @@ void GeodesicSolver::setSources(std::span<const GeodesicSource> sources) {
 }
 
 void GeodesicSolver::labelComponents() {
-  const int n = static_cast<int>(a1_.outerSize());
+  const Eigen::SparseMatrix<double>& a1 = diffusionSolver_.matrix();
+  const int n = static_cast<int>(a1.outerSize());
   component_.assign(static_cast<size_t>(n), -1);
   componentCount_ = 0;
-  const int* outer = a1_.outerIndexPtr();
-  const int* inner = a1_.innerIndexPtr();
+  const int* outer = a1.outerIndexPtr();
+  const int* inner = a1.innerIndexPtr();
   std::vector<int32_t> queue;
   for (int seed = 0; seed < n; ++seed) {
     if (component_[static_cast<size_t>(seed)] >= 0) continue;

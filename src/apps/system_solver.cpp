@@ -341,6 +341,10 @@ double SystemSolver::relativeResidual(const Eigen::MatrixXd& b, const Eigen::Mat
   return impl_->relativeResidual(b, x);
 }
 
+const Eigen::SparseMatrix<double>& SystemSolver::matrix() const {
+  return impl_->a;
+}
+
 std::string SystemSolver::summary() const {
   if (impl_->settings.kind == SolverKind::Direct)
     return "direct solver (CHOLMOD), " + std::to_string(impl_->grid.unknownCount()) + " unknowns";

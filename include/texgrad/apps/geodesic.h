@@ -201,7 +201,6 @@ class GeodesicSolver {
   std::unique_ptr<Gradients> gradients_;
   SystemSolver diffusionSolver_, distanceSolver_;
   std::unique_ptr<SystemSolver> dirichletSolver_;  ///< only with Average on meshes with boundary
-  Eigen::SparseMatrix<double> a1_, a2_, a1Dirichlet_;
   std::vector<uint8_t> dirichlet_;  ///< per unknown: held at zero in the Dirichlet diffusion
   int dirichletCount_ = 0;
   std::vector<ResolvedSource> sources_;

@@ -68,6 +68,8 @@ class SystemSolver {
   SolveReport refine(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, bool measureResidual = true);
   /// ||b - A x|| / ||b|| in double (one sparse product; ||A x|| if b = 0).
   double relativeResidual(const Eigen::MatrixXd& b, const Eigen::MatrixXd& x) const;
+  /// The system matrix A of the last update (compressed).
+  const Eigen::SparseMatrix<double>& matrix() const;
   /// Multigrid hierarchy summary, or a one-line description for the direct solver.
   std::string summary() const;
   /// Seconds spent in init and in the last update.
