@@ -30,8 +30,6 @@ double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-/// Unknowns per task in per-unknown loops.
-constexpr Eigen::Index kUnknownsPerTask = 1 << 14;
 /// NearField offset: annulus of chord distances around a source, in texel sizes of its face.
 constexpr double kNearFieldInner = 2.0;
 constexpr double kNearFieldOuter = 4.0;
@@ -397,7 +395,7 @@ void GeodesicSolver::distanceStep(bool full) {
   const double shift = offset();
   const double infinity = std::numeric_limits<double>::infinity();
   gradients_->arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, y_.rows(), kUnknownsPerTask),
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, y_.rows(), kGeodesicUnknownsPerTask),
                       [&](const tbb::blocked_range<Eigen::Index>& range) {
                         for (Eigen::Index u = range.begin(); u != range.end(); ++u) {
                           y_(u, 0) -= shift;

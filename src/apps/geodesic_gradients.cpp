@@ -19,8 +19,6 @@ namespace {
 /// Faces per parallel task when building gradient samples (fixed: results do not depend on
 /// threads).
 constexpr int kFacesPerTask = 64;
-/// Unknowns per task in per-unknown loops.
-constexpr Eigen::Index kUnknownsPerTask = 1 << 14;
 
 }  // namespace
 
@@ -204,7 +202,7 @@ void GeodesicSolver::Gradients::addRowDivergence(const CellSample* first, const 
 
 void GeodesicSolver::Gradients::divergence(const double* u, double* div, Eigen::Index n) {
   arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, n, kUnknownsPerTask),
+    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, n, kGeodesicUnknownsPerTask),
                       [&](const tbb::blocked_range<Eigen::Index>& range) {
                         std::fill(div + range.begin(), div + range.end(), 0.0);
                       });

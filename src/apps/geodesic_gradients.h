@@ -13,6 +13,9 @@
 
 namespace texgrad {
 
+/// Unknowns per parallel task in the geodesic app's per-unknown loops.
+constexpr Eigen::Index kGeodesicUnknownsPerTask = 1 << 14;
+
 /// One-point quadrature samples of the texel-basis gradients (paper Sec. 7.3): one per plain
 /// piece T ∩ cell (at its centroid) and one per quadratic element of seam pieces (at its
 /// centroid). div_h(omega)_t = sum_q weight_q dphi_t(q) . X_q with X_q = g^-1 omega_q.

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <vector>
 
+#include "solver/grid_kernels.h"
+
 namespace texgrad {
 namespace {
 
@@ -130,12 +132,14 @@ Sparse galerkinProduct(const Sparse& a, const GridLevel& fine, const GridLevel& 
         const size_t sj = static_cast<size_t>(j);
         const GridBox& box = fine.boxes[static_cast<size_t>(
             fine.boxOfChart[static_cast<size_t>(coarse.chartOfUnknown[sj])])];
-        const int cx = 2 * coarse.xOfUnknown[sj], cy = 2 * coarse.yOfUnknown[sj];
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            if (!box.contains(cx + dx, cy + dy)) continue;
-            const int r = fine.unknownOfSlot[static_cast<size_t>(box.slot(cx + dx, cy + dy))];
-            if (r >= 0) out.emplace_back(r, (dx == 0 ? 1.0 : 0.5) * (dy == 0 ? 1.0 : 0.5));
+        const int x = coarse.xOfUnknown[sj], y = coarse.yOfUnknown[sj];
+        for (int fy = 2 * y - 1; fy <= 2 * y + 1; ++fy)
+          for (int fx = 2 * x - 1; fx <= 2 * x + 1; ++fx) {
+            if (!box.contains(fx, fy)) continue;
+            const int r = fine.unknownOfSlot[static_cast<size_t>(box.slot(fx, fy))];
+            if (r >= 0)
+              out.emplace_back(r, detail::transferWeight<double>(fx, x) *
+                                      detail::transferWeight<double>(fy, y));
           }
         std::sort(out.begin(), out.end());  // by fine index, as in P's column, for any numbering
       },
