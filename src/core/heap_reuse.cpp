@@ -51,8 +51,12 @@ void reserveHugePageHeap() {
 bool reuseFreedMemory() {
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
   // M_MMAP_MAX = 0: no block gets its own mapping; M_TRIM_THRESHOLD = -1 (SIZE_MAX inside glibc):
-  // the heap top is never handed back to the system (mallopt returns 1 on success).
-  if (mallopt(M_MMAP_MAX, 0) != 1 || mallopt(M_TRIM_THRESHOLD, -1) != 1) return false;
+  // the heap top is never handed back to the system; M_ARENA_MAX = 1: worker threads allocate
+  // from the same heap, so memory one thread frees is reused by all (a per-thread arena keeps
+  // its freed pages resident but out of the other threads' reach). mallopt returns 1 on success.
+  if (mallopt(M_MMAP_MAX, 0) != 1 || mallopt(M_TRIM_THRESHOLD, -1) != 1 ||
+      mallopt(M_ARENA_MAX, 1) != 1)
+    return false;
   reserveHugePageHeap();
   return true;
 #else

@@ -97,27 +97,21 @@ void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
     }
   });
   reportProgress(progress, "integrate pieces", 0.6);
-  // Concatenate in chunk order, then stable-sort plain pieces by band.
-  // Chunk offsets into the concatenated arrays, then every chunk copied on its own task.
+  // Seam pieces: concatenated in chunk order, every chunk copied on its own task.
   struct Offsets {
-    size_t full = 0, partial = 0, seam = 0, texels = 0, values = 0;
+    size_t seam = 0, texels = 0, values = 0;
   };
   std::vector<Offsets> at(out.size() + 1);
   for (size_t c = 0; c < out.size(); ++c) {
-    at[c + 1] = {at[c].full + out[c].full.size(), at[c].partial + out[c].partial.size(),
-                 at[c].seam + out[c].seam.size(), at[c].texels + out[c].texels.size(),
+    at[c + 1] = {at[c].seam + out[c].seam.size(), at[c].texels + out[c].texels.size(),
                  at[c].values + out[c].values.size()};
     report.unexpectedCrossings += out[c].unexpected;
   }
-  std::vector<FullPiece> fullAll(at.back().full);
-  std::vector<PartialPiece> partialAll(at.back().partial);
   seam.resize(at.back().seam);
   seamTexels.resize(at.back().texels);
   seamValues.resize(at.back().values);
   tbb::parallel_for(size_t(0), out.size(), [&](size_t c) {
     Chunk& chunk = out[c];
-    std::copy(chunk.full.begin(), chunk.full.end(), fullAll.begin() + at[c].full);
-    std::copy(chunk.partial.begin(), chunk.partial.end(), partialAll.begin() + at[c].partial);
     std::copy(chunk.texels.begin(), chunk.texels.end(), seamTexels.begin() + at[c].texels);
     std::copy(chunk.values.begin(), chunk.values.end(), seamValues.begin() + at[c].values);
     for (size_t k = 0; k < chunk.seam.size(); ++k) {
@@ -127,19 +121,27 @@ void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
       sp.valueBegin += static_cast<int64_t>(at[c].values);
       seam[at[c].seam + k] = sp;
     }
-    chunk = Chunk();
+    chunk.seam = {};
+    chunk.texels = {};
+    chunk.values = {};
   });
+  // Plain pieces: bucketed by band straight from the chunks (a stable sort of their
+  // concatenation), each chunk freed once copied, so no second full copy is ever held.
   bandCount = band(basis.grid().ny - 1) + 1;
-  auto bucket = [&](auto& all, auto& sorted, std::vector<int64_t>& begin) {
-    begin.assign(bandCount + 1, 0);
-    for (const auto& p : all) ++begin[band(p.cellY) + 1];
+  auto bucket = [&](auto member, auto& sorted, std::vector<int64_t>& begin) {
+    begin.assign(static_cast<size_t>(bandCount) + 1, 0);
+    for (const Chunk& chunk : out)
+      for (const auto& p : chunk.*member) ++begin[static_cast<size_t>(band(p.cellY)) + 1];
     for (int b = 0; b < bandCount; ++b) begin[b + 1] += begin[b];
     std::vector<int64_t> cursor(begin.begin(), begin.end() - 1);
-    sorted.resize(all.size());
-    for (const auto& p : all) sorted[cursor[band(p.cellY)]++] = p;
+    sorted.resize(static_cast<size_t>(begin.back()));
+    for (Chunk& chunk : out) {
+      for (const auto& p : chunk.*member) sorted[cursor[band(p.cellY)]++] = p;
+      chunk.*member = {};
+    }
   };
-  bucket(fullAll, full, fullBandBegin);
-  bucket(partialAll, partial, partialBandBegin);
+  bucket(&Chunk::full, full, fullBandBegin);
+  bucket(&Chunk::partial, partial, partialBandBegin);
   report.plainFullPieces = static_cast<int>(full.size());
   report.plainPartialPieces = static_cast<int>(partial.size());
   report.seamPieces = static_cast<int>(seam.size());

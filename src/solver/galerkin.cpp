@@ -19,17 +19,18 @@ using RowMajor = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 /// Coarse columns per task (fixed, so the split does not depend on the thread count).
 constexpr Eigen::Index kColumnsPerTask = 2048;
 
-/// Dense accumulator over an index range with the list of touched indices; reset by stamps.
+/// Dense accumulator over an index range with the list of touched indices; reset by stamps
+/// (a column index: matrices have int indices).
 struct Accumulator {
   std::vector<double> value;
-  std::vector<Eigen::Index> stamp;
+  std::vector<int> stamp;
   std::vector<int> touched;
   void resize(Eigen::Index n) {
     if (static_cast<Eigen::Index>(value.size()) == n) return;
     value.assign(static_cast<size_t>(n), 0.0);
     stamp.assign(static_cast<size_t>(n), -1);
   }
-  void add(int i, double v, Eigen::Index column) {
+  void add(int i, double v, int column) {
     const size_t si = static_cast<size_t>(i);
     if (stamp[si] != column) {
       stamp[si] = column;
@@ -40,16 +41,17 @@ struct Accumulator {
   }
 };
 
-struct Scratch {
-  Accumulator fine, coarse;
-  std::vector<std::pair<int, double>> column;  ///< (fine row, weight) of one column of P
-};
-
 /// One task's columns of the result, in compressed form with a local column pointer.
 struct Block {
   std::vector<int> count;
   std::vector<int> inner;
   std::vector<double> values;
+};
+
+struct Scratch {
+  Accumulator fine, coarse;
+  std::vector<std::pair<int, double>> column;  ///< (fine row, weight) of one column of P
+  Block block;  ///< the current task's columns, grown once per thread and copied out exactly
 };
 
 /// Pᵀ A P with P given by its columns and rows: children(j, out) sets out to the (fine row,
@@ -64,9 +66,13 @@ Sparse galerkinColumns(const Sparse& a, Eigen::Index nc, Children children, Pare
     Scratch& s = scratch.local();
     s.fine.resize(a.rows());
     s.coarse.resize(nc);
-    Block& block = blocks[static_cast<size_t>(t)];
-    const Eigen::Index first = t * kColumnsPerTask, last = std::min(nc, first + kColumnsPerTask);
-    for (Eigen::Index j = first; j < last; ++j) {
+    Block& block = s.block;
+    block.count.clear();
+    block.inner.clear();
+    block.values.clear();
+    const int first = static_cast<int>(t * kColumnsPerTask);
+    const int last = static_cast<int>(std::min(nc, t * kColumnsPerTask + kColumnsPerTask));
+    for (int j = first; j < last; ++j) {
       s.fine.touched.clear();
       s.coarse.touched.clear();
       children(j, s.column);
@@ -84,7 +90,13 @@ Sparse galerkinColumns(const Sparse& a, Eigen::Index nc, Children children, Pare
         block.values.push_back(s.coarse.value[static_cast<size_t>(k)]);
       }
     }
+    // Exact-size copy: growth slack would otherwise stay allocated until the result is built.
+    Block& out = blocks[static_cast<size_t>(t)];
+    out.count.assign(block.count.begin(), block.count.end());
+    out.inner.assign(block.inner.begin(), block.inner.end());
+    out.values.assign(block.values.begin(), block.values.end());
   });
+  scratch.clear();  // the accumulators go before the result is allocated
   Sparse c(nc, nc);
   Eigen::Index nonZeros = 0;
   for (const Block& block : blocks) nonZeros += static_cast<Eigen::Index>(block.inner.size());

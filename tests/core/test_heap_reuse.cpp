@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include "texgrad/core/heap_reuse.h"
 
@@ -73,6 +74,21 @@ TEST(HeapReuse, LargeBlocksComeFromTheHeapWithHugePages) {
   EXPECT_EQ(std::stoi(mapping.substr(field + 12)), 1)
       << "the heap block is not marked for transparent huge pages:\n"
       << mapping;
+}
+
+TEST(HeapReuse, WorkerThreadsAllocateFromTheSameHeap) {
+  ASSERT_TRUE(reuseFreedMemory());
+  // A block freed by one thread must be reusable by all: a worker's block comes from the
+  // process heap, not from a per-thread arena (an anonymous mapping of its own).
+  void* block = nullptr;
+  std::thread worker([&] { block = std::malloc(size_t(1) << 20); });
+  worker.join();
+  ASSERT_NE(block, nullptr);
+  const std::string mapping = mappingOf(block);
+  std::free(block);
+  EXPECT_NE(mapping.find("[heap]"), std::string::npos) << "a worker thread's block is not in "
+                                                        << "the heap:\n"
+                                                        << mapping;
 }
 
 #else

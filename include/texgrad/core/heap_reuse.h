@@ -12,6 +12,7 @@ namespace texgrad {
 /// pages (where the kernel leaves that choice to programs: 'madvise' mode), so a first touch
 /// faults a 2 MB page instead of 512 small ones: spot at 2048^2 is ready to cycle (read,
 /// operators, multigrid set-up) in 3.4-3.9 s instead of 4.6-5.6 s there (interleaved runs).
+/// All threads share that heap (one malloc arena), so what a worker frees, any thread reuses.
 /// Freed memory is not returned to the system before exit. Call once at program start-up (the
 /// CLI, benchmarks and tests do); returns false, changing nothing, on other C libraries and
 /// under AddressSanitizer (which has its own allocator).
