@@ -273,9 +273,30 @@ void SystemSolver::init(const Eigen::SparseMatrix<double>& pattern) {
   impl_->initTime = secondsSince(start);
 }
 
-void SystemSolver::update(Eigen::SparseMatrix<double> a) {
+namespace {
+
+/// Moves `from` into `to` and frees to's old storage: swaps, as Eigen 3.4's SparseMatrix
+/// assignment would copy even from std::move.
+void adopt(Eigen::SparseMatrix<double>& to, Eigen::SparseMatrix<double>& from) {
+  to.swap(from);
+  Eigen::SparseMatrix<double>().swap(from);
+}
+
+}  // namespace
+
+void SystemSolver::update(const Eigen::SparseMatrix<double>& a) {
+  Eigen::SparseMatrix<double> copy = a;
+  update(std::move(copy));
+}
+
+void SystemSolver::initAndUpdate(const Eigen::SparseMatrix<double>& a) {
+  Eigen::SparseMatrix<double> copy = a;
+  initAndUpdate(std::move(copy));
+}
+
+void SystemSolver::update(Eigen::SparseMatrix<double>&& a) {
   const auto start = std::chrono::steady_clock::now();
-  impl_->a = std::move(a);
+  adopt(impl_->a, a);
   impl_->a.makeCompressed();
   impl_->cacheValid = false;
   if (impl_->settings.kind == SolverKind::Direct)
@@ -288,14 +309,14 @@ void SystemSolver::update(Eigen::SparseMatrix<double> a) {
   impl_->updateTime = secondsSince(start);
 }
 
-void SystemSolver::initAndUpdate(Eigen::SparseMatrix<double> a) {
+void SystemSolver::initAndUpdate(Eigen::SparseMatrix<double>&& a) {
   if (impl_->settings.kind == SolverKind::Direct) {
     init(a);
     update(std::move(a));
     return;
   }
   const auto start = std::chrono::steady_clock::now();
-  impl_->a = std::move(a);
+  adopt(impl_->a, a);
   impl_->a.makeCompressed();
   impl_->cacheValid = false;
   impl_->visitMultigrid([&](auto& solver) {

@@ -6,9 +6,11 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <string>
 #include <vector>
 
 #include "solver/grid_kernels.h"
+#include "texgrad/core/error.h"
 
 namespace texgrad {
 namespace {
@@ -118,9 +120,18 @@ Sparse galerkinColumns(const Sparse& a, Eigen::Index nc, Children children, Pare
   return c;
 }
 
+/// Throws unless a is n x n with n = `fineUnknowns`.
+void requireSquare(const Sparse& a, Eigen::Index fineUnknowns) {
+  if (a.rows() != fineUnknowns || a.cols() != fineUnknowns)
+    throw InvalidInputError("Galerkin product: matrix is " + std::to_string(a.rows()) + " x " +
+                            std::to_string(a.cols()) + " but the fine level has " +
+                            std::to_string(fineUnknowns) + " unknowns");
+}
+
 }  // namespace
 
 Sparse galerkinProduct(const Sparse& a, const Sparse& p) {
+  requireSquare(a, p.rows());
   const RowMajor pRows = p;  // row r of P: the coarse columns fine texel r interpolates from
   return galerkinColumns(
       a, p.cols(),
@@ -136,6 +147,7 @@ Sparse galerkinProduct(const Sparse& a, const Sparse& p) {
 }
 
 Sparse galerkinProduct(const Sparse& a, const GridLevel& fine, const GridLevel& coarse) {
+  requireSquare(a, fine.unknownCount());
   return galerkinColumns(
       a, coarse.unknownCount(),
       [&](Eigen::Index j, std::vector<std::pair<int, double>>& out) {

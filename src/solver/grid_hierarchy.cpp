@@ -44,6 +44,15 @@ void growBounds(std::array<int, 4>& b, int x, int y) {
   b = {std::min(b[0], x), std::min(b[1], y), std::max(b[2], x), std::max(b[3], y)};
 }
 
+/// Sizes the per-unknown arrays for `n` unknowns up front (no growth slack stays allocated).
+void reserveUnknowns(GridLevel& level, size_t n) {
+  level.slotOfUnknown.reserve(n);
+  level.chartOfUnknown.reserve(n);
+  level.xOfUnknown.reserve(n);
+  level.yOfUnknown.reserve(n);
+  level.footprintInterior.reserve(n);
+}
+
 void pushUnknown(GridLevel& level, int64_t slot, int chart, int x, int y, bool interior) {
   level.unknownOfSlot[static_cast<size_t>(slot)] = level.unknownCount();
   level.slotOfUnknown.push_back(slot);
@@ -62,6 +71,7 @@ GridLevel buildFinestLevel(const TexelGrid& grid, int chartCount) {
                t / grid.nx);
   }
   layoutBoxes(level, bounds);
+  reserveUnknowns(level, static_cast<size_t>(grid.unknownCount()));
   for (int u = 0; u < grid.unknownCount(); ++u) {
     const size_t t = static_cast<size_t>(grid.texelOfUnknown[static_cast<size_t>(u)]);
     const int chart = grid.texelChart[t];
@@ -94,6 +104,7 @@ GridLevel buildCoarseLevel(const GridLevel& fine) {
         used[static_cast<size_t>(box.slot(px.index[static_cast<size_t>(i)],
                                           py.index[static_cast<size_t>(j)]))] = 1;
   }
+  reserveUnknowns(coarse, static_cast<size_t>(std::count(used.begin(), used.end(), uint8_t{1})));
   for (const GridBox& box : coarse.boxes) {
     const GridBox& fbox = fine.boxes[static_cast<size_t>(fine.boxOfChart[static_cast<size_t>(box.chart)])];
     for (int y = box.y0; y < box.y0 + box.height; ++y) {

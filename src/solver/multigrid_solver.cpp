@@ -136,7 +136,8 @@ struct MultigridSolver<Scalar>::Impl {
   /// `symbolicPhase` builds the split and the CHOLMOD analyses from the patterns (Galerkin
   /// products never drop an entry, so the values do not change any pattern);
   /// `numericPhase` fills stencils and boundary data and factorises. Both at once cost one
-  /// chain of Galerkin products instead of two.
+  /// chain of Galerkin products instead of two. A^{l+1} is formed before level l's data are
+  /// filled in, so the product's temporaries never coexist with them (lower peak memory).
   void walkLevels(const Eigen::SparseMatrix<double>& a0, bool symbolicPhase, bool numericPhase) {
     if (symbolicPhase) {
       levels.clear();
@@ -144,7 +145,7 @@ struct MultigridSolver<Scalar>::Impl {
       nonZeros.assign(levels.size(), 0);
       coarseSolver = CholmodSolver();
     }
-    Eigen::SparseMatrix<double> coarse;
+    Eigen::SparseMatrix<double> coarse;  // A^l for l > 0
     const Eigen::SparseMatrix<double>* a = &a0;
     for (int l = 0; l <= coarsest(); ++l) {
       const size_t sl = static_cast<size_t>(l);
@@ -160,6 +161,11 @@ struct MultigridSolver<Scalar>::Impl {
             std::to_string(nonZeros[sl]) + "; call init again when the sparsity changes");
       }
       if (l > 0 && numericPhase) shiftDiagonal(coarse);
+      // Initialised, never assigned: Eigen 3.4's SparseMatrix has no move assignment, so
+      // `x = product` would copy it.
+      Eigen::SparseMatrix<double> next = l < coarsest()
+                                             ? galerkinProduct(*a, grid, hierarchy.level(l + 1))
+                                             : Eigen::SparseMatrix<double>();
       if (l < coarsest() || l == 0) {
         if (symbolicPhase) detail::classifyLevel(grid, *a, lv.sys);
         if (numericPhase) {
@@ -171,7 +177,7 @@ struct MultigridSolver<Scalar>::Impl {
         if (symbolicPhase) coarseSolver.analyzePattern(*a);
         if (numericPhase) coarseSolver.factorize(*a);
       } else {
-        coarse = galerkinProduct(*a, grid, hierarchy.level(l + 1));
+        coarse.swap(next);  // next now holds A^l, freed at the end of this iteration
         a = &coarse;
       }
     }

@@ -101,4 +101,31 @@ TEST(SystemSolver, RefineWithTheDirectSolverIsExact) {
 }
 
 }  // namespace
+TEST(SystemSolver, RvalueUpdateTakesTheMatrixOverAndConstUpdateCopiesIt) {
+  const test::SyntheticProblem p = test::multiChartProblem(8);
+  const Eigen::SparseMatrix<double> a = p.system(1e2);
+  for (const SolverKind kind : {SolverKind::Multigrid, SolverKind::Direct}) {
+    SolverSettings settings = floatMultigrid();
+    settings.kind = kind;
+    SystemSolver solver(p.grid, settings);
+    Eigen::SparseMatrix<double> owned = a;
+    const double* storage = owned.valuePtr();
+    solver.initAndUpdate(std::move(owned));
+    // Taken over, not copied (Eigen 3.4 would copy on a plain assignment from std::move).
+    EXPECT_EQ(solver.matrix().valuePtr(), storage);
+    EXPECT_EQ(owned.nonZeros(), 0);
+    EXPECT_EQ((solver.matrix() - a).norm(), 0.0);
+
+    const Eigen::SparseMatrix<double> shifted = p.system(1e3);
+    solver.update(shifted);  // const: copied, the argument is untouched
+    EXPECT_NE(solver.matrix().valuePtr(), shifted.valuePtr());
+    EXPECT_EQ((solver.matrix() - shifted).norm(), 0.0);
+    Eigen::SparseMatrix<double> next = a;
+    storage = next.valuePtr();
+    solver.update(std::move(next));
+    EXPECT_EQ(solver.matrix().valuePtr(), storage);
+    EXPECT_EQ(next.nonZeros(), 0);
+  }
+}
+
 }  // namespace texgrad

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "synthetic_problem.h"
+#include "texgrad/core/error.h"
 #include "texgrad/solver/galerkin.h"
 #include "texgrad/solver/grid_hierarchy.h"
 
@@ -55,6 +56,15 @@ TEST(Galerkin, KeepsStructuralZerosSoThePatternIgnoresValues) {
   p.setIdentity();
   const Eigen::SparseMatrix<double> c = galerkinProduct(a, p);
   EXPECT_EQ(c.nonZeros(), 4);
+}
+
+TEST(Galerkin, RejectsAMatrixOfTheWrongSize) {
+  const test::SyntheticProblem p = test::squareProblem(16);
+  const test::SyntheticProblem q = test::squareProblem(17);
+  const GridHierarchy h = GridHierarchy::build(p.grid, 2, 16);
+  ASSERT_GE(h.levelCount(), 2);
+  EXPECT_THROW(galerkinProduct(q.system(1.0), h.level(0), h.level(1)), InvalidInputError);
+  EXPECT_THROW(galerkinProduct(q.system(1.0), h.prolongation(0)), InvalidInputError);
 }
 
 TEST(Galerkin, LatticeProlongationMatchesTheStoredOneBitForBit) {

@@ -51,10 +51,16 @@ class SystemSolver {
   /// Symbolic phase for the sparsity pattern of every later A (values unused).
   void init(const Eigen::SparseMatrix<double>& pattern);
   /// Numeric phase for a new A with the same pattern (new alpha, beta or metric). The solver
-  /// keeps A for residuals: pass a temporary (or std::move) to spare a copy.
-  void update(Eigen::SparseMatrix<double> a);
+  /// keeps a copy of A for residuals.
+  void update(const Eigen::SparseMatrix<double>& a);
+  /// As update, but takes over a's storage (a temporary, or std::move(a): a is left empty)
+  /// instead of copying it. Eigen 3.4's SparseMatrix has no move constructor or assignment, so
+  /// this overload is what spares the copy.
+  void update(Eigen::SparseMatrix<double>&& a);
   /// init(a) then update(a); multigrid forms its Galerkin products once instead of twice.
-  void initAndUpdate(Eigen::SparseMatrix<double> a);
+  void initAndUpdate(const Eigen::SparseMatrix<double>& a);
+  /// As initAndUpdate, taking over a's storage (see update).
+  void initAndUpdate(Eigen::SparseMatrix<double>&& a);
   /// Solves A X = B (n x k), using X as the initial guess for the iterative kinds.
   SolveReport solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
   /// One V-cycle (Multigrid and MultigridCg kinds) or an exact solve (Direct), for interactive

@@ -9,13 +9,15 @@ namespace texgrad {
 
 /// Pᵀ A P for A (n x n) and P (n x m), column by column without forming A P. The
 /// pattern is structural (no entry is dropped for being zero), so it depends only on the
-/// patterns of A and P; the result does not depend on the thread count.
+/// patterns of A and P; the result does not depend on the thread count. Throws
+/// InvalidInputError unless A is square with P's row count.
 Eigen::SparseMatrix<double> galerkinProduct(const Eigen::SparseMatrix<double>& a,
                                             const Eigen::SparseMatrix<double>& p);
 
 /// Pᵀ A P for the bilinear prolongation P from `coarse` to `fine` (consecutive levels of one
 /// GridHierarchy), computed from the lattice positions without storing P; equal, bit for bit, to
-/// galerkinProduct(a, GridHierarchy::prolongation(l)).
+/// galerkinProduct(a, GridHierarchy::prolongation(l)). Throws InvalidInputError unless A is
+/// square with fine's unknown count.
 Eigen::SparseMatrix<double> galerkinProduct(const Eigen::SparseMatrix<double>& a,
                                             const GridLevel& fine, const GridLevel& coarse);
 
