@@ -19,6 +19,12 @@ namespace {
 
 constexpr int kBandRows = 8;  ///< cell rows per assembly band (two bands apart never share a row)
 
+/// Frees a vector's storage (`v = {}` would keep its capacity).
+template <typename T>
+void freeStorage(std::vector<T>& v) {
+  std::vector<T>().swap(v);
+}
+
 /// Appends the upper triangle of a symmetric k x k matrix, column by column (k (k + 1) / 2 values).
 void appendUpperTriangle(const Eigen::MatrixXd& m, std::vector<double>& out) {
   for (Eigen::Index c = 0; c < m.cols(); ++c)
@@ -121,9 +127,9 @@ void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
       sp.valueBegin += static_cast<int64_t>(at[c].values);
       seam[at[c].seam + k] = sp;
     }
-    chunk.seam = {};
-    chunk.texels = {};
-    chunk.values = {};
+    freeStorage(chunk.seam);
+    freeStorage(chunk.texels);
+    freeStorage(chunk.values);
   });
   // Plain pieces: bucketed by band straight from the chunks (a stable sort of their
   // concatenation), each chunk freed once copied, so no second full copy is ever held.
@@ -137,7 +143,7 @@ void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
     sorted.resize(static_cast<size_t>(begin.back()));
     for (Chunk& chunk : out) {
       for (const auto& p : chunk.*member) sorted[cursor[band(p.cellY)]++] = p;
-      chunk.*member = {};
+      freeStorage(chunk.*member);
     }
   };
   bucket(&Chunk::full, full, fullBandBegin);
