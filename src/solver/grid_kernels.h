@@ -183,18 +183,25 @@ void interiorResidual(const LevelSystem& sys, const T* stencil, const T* b, cons
                     });
 }
 
-/// Accumulates, per boundary row j and channel c, out(j, c) = b - sum over csr row j of A x.
+/// Which entries of the boundary rows a residual subtracts.
+enum class BoundaryColumns { OffBlock, All };
+
+/// Accumulates, per boundary row j and channel c, out(j, c) = b - (A_bi x_i) or b - (A x) for
+/// columns OffBlock or All.
 template <typename T>
-void boundaryRowsResidual(const LevelSystem& sys, const SlotCsr& csr, const T* b, const T* x, int k,
-                          Eigen::MatrixXd& out) {
+void boundaryRowsResidual(const LevelSystem& sys, BoundaryColumns columns, const T* b, const T* x,
+                          int k, Eigen::MatrixXd& out) {
   const int64_t plane = sys.slotCount();
+  const SlotCsr& csr = sys.boundaryRows;
   out.resize(sys.boundaryCount(), k);
   tbb::parallel_for(tbb::blocked_range<int>(0, sys.boundaryCount(), 256),
                     [&](const tbb::blocked_range<int>& range) {
                       for (int j = range.begin(); j != range.end(); ++j) {
-                        const int64_t s = sys.boundarySlots[static_cast<size_t>(j)];
-                        const int64_t e0 = csr.ptr[static_cast<size_t>(j)],
-                                      e1 = csr.ptr[static_cast<size_t>(j) + 1];
+                        const size_t sj = static_cast<size_t>(j);
+                        const int64_t s = sys.boundarySlots[sj];
+                        const int64_t e0 = csr.ptr[sj],
+                                      e1 = columns == BoundaryColumns::All ? csr.ptr[sj + 1]
+                                                                           : sys.offBlockEnd[sj];
                         for (int c = 0; c < k; ++c) {
                           const T* xc = x + c * plane;
                           double acc = static_cast<double>(b[c * plane + s]);
@@ -215,7 +222,7 @@ void solveBoundary(const LevelSystem& sys, const T* b, T* x, int k, Eigen::Matri
                    T* r = nullptr) {
   if (sys.boundaryCount() == 0) return;
   const int64_t plane = sys.slotCount();
-  boundaryRowsResidual(sys, sys.offBlock, b, x, k, work);
+  boundaryRowsResidual(sys, BoundaryColumns::OffBlock, b, x, k, work);
   sys.boundarySolver.solveInPlace(work);
   tbb::parallel_for(tbb::blocked_range<int>(0, sys.boundaryCount(), 4096),
                     [&](const tbb::blocked_range<int>& range) {
@@ -255,7 +262,7 @@ template <typename T>
 void boundaryResidual(const LevelSystem& sys, const T* b, const T* x, T* r, int k,
                       Eigen::MatrixXd& work) {
   if (sys.boundaryCount() == 0) return;
-  boundaryRowsResidual(sys, sys.fullRows, b, x, k, work);
+  boundaryRowsResidual(sys, BoundaryColumns::All, b, x, k, work);
   for (int c = 0; c < k; ++c)
     for (int j = 0; j < sys.boundaryCount(); ++j)
       r[c * sys.slotCount() + sys.boundarySlots[static_cast<size_t>(j)]] =

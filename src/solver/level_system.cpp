@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <string>
 
 #include "texgrad/core/error.h"
@@ -76,51 +77,91 @@ void collectRows(const GridLevel& level, LevelSystem& system) {
   }
 }
 
+/// Unknown of boundary row j.
+int unknownOfBoundary(const GridLevel& level, const LevelSystem& system, int j) {
+  return level.unknownOfSlot[static_cast<size_t>(system.boundarySlots[static_cast<size_t>(j)])];
+}
+
+/// Entries of column u of `a` (its row u: A is symmetric) whose row is (isBoundary true) or is
+/// not (false) a boundary unknown.
+int64_t countEntries(const Eigen::SparseMatrix<double>& a, int u, const LevelSystem& system,
+                     bool isBoundary) {
+  int64_t count = 0;
+  for (SparseIt it(a, u); it; ++it)
+    count += (system.boundaryOfUnknown[static_cast<size_t>(it.row())] >= 0) == isBoundary;
+  return count;
+}
+
+/// Turns per-row counts in ptr[1..n] into row starts (ptr[0] = 0); returns the total.
+int64_t countsToStarts(std::vector<int64_t>& ptr) {
+  ptr[0] = 0;
+  for (size_t j = 1; j < ptr.size(); ++j) ptr[j] += ptr[j - 1];
+  return ptr.back();
+}
+
+/// A_bb^l, built in compressed form: column j of A_bb is column u(j) of A restricted to boundary
+/// rows, and boundary indices grow with the unknown index (classifyLevel), so each column's rows
+/// come out sorted without a triplet list.
 Eigen::SparseMatrix<double> boundaryBlock(const GridLevel& level,
                                           const Eigen::SparseMatrix<double>& a,
                                           const LevelSystem& system) {
-  std::vector<Eigen::Triplet<double>> triplets;
-  for (int j = 0; j < system.boundaryCount(); ++j) {
-    const int u = level.unknownOfSlot[static_cast<size_t>(system.boundarySlots[static_cast<size_t>(j)])];
-    for (SparseIt it(a, u); it; ++it) {
+  const int nb = system.boundaryCount();
+  std::vector<int64_t> start(static_cast<size_t>(nb) + 1, 0);
+  tbb::parallel_for(0, nb, [&](int j) {
+    start[static_cast<size_t>(j) + 1] =
+        countEntries(a, unknownOfBoundary(level, system, j), system, true);
+  });
+  const int64_t total = countsToStarts(start);
+  if (total > std::numeric_limits<int>::max())
+    throw InvalidInputError("multigrid: the boundary block has more than 2^31 non-zeros");
+  Eigen::SparseMatrix<double> bb(nb, nb);
+  bb.resizeNonZeros(static_cast<Eigen::Index>(total));
+  for (int j = 0; j <= nb; ++j) bb.outerIndexPtr()[j] = static_cast<int>(start[static_cast<size_t>(j)]);
+  tbb::parallel_for(0, nb, [&](int j) {
+    int64_t e = start[static_cast<size_t>(j)];
+    for (SparseIt it(a, unknownOfBoundary(level, system, j)); it; ++it) {
       const int jb = system.boundaryOfUnknown[static_cast<size_t>(it.row())];
-      if (jb >= 0) triplets.emplace_back(jb, j, it.value());
+      if (jb < 0) continue;
+      bb.innerIndexPtr()[e] = jb;
+      bb.valuePtr()[e++] = it.value();
     }
-  }
-  Eigen::SparseMatrix<double> bb(system.boundaryCount(), system.boundaryCount());
-  bb.setFromTriplets(triplets.begin(), triplets.end());
+  });
   return bb;
 }
 
 /// Fills interiorNextToBoundary and fixupSlots from the columns of `a` at interior unknowns
-/// (A is symmetric, so column u holds row u).
+/// (A is symmetric, so column u holds row u), each array allocated at its exact size.
 void assignInteriorNextToBoundary(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
                                   LevelSystem& system) {
   SlotCsr& fix = system.interiorNextToBoundary;
-  fix = {};
-  fix.ptr.push_back(0);
-  system.fixupSlots.clear();
-  // Few interior unknowns touch the boundary: find them on all cores, then fill in order.
+  // Few interior unknowns touch the boundary: count their boundary entries on all cores.
   const std::vector<int32_t>& interior = system.interiorUnknowns;
-  std::vector<uint8_t> touches(interior.size(), 0);
+  std::vector<uint8_t> touching(interior.size(), 0);  // at most 9 (a 3 x 3 stencil row)
   tbb::parallel_for(size_t(0), interior.size(), [&](size_t k) {
-    for (SparseIt it(a, interior[k]); it; ++it)
-      if (system.boundaryOfUnknown[static_cast<size_t>(it.row())] >= 0) {
-        touches[k] = 1;
-        return;
-      }
+    touching[k] = static_cast<uint8_t>(countEntries(a, interior[k], system, true));
   });
+  size_t rows = 0;
+  for (uint8_t count : touching) rows += count > 0;
+  fix.ptr.assign(rows + 1, 0);
+  system.fixupSlots.resize(rows);
+  size_t row = 0;
   for (size_t k = 0; k < interior.size(); ++k) {
-    if (!touches[k]) continue;
-    const int u = interior[k];
-    for (SparseIt it(a, u); it; ++it) {
+    if (touching[k] == 0) continue;
+    fix.ptr[row + 1] = touching[k];
+    system.fixupSlots[row++] = level.slotOfUnknown[static_cast<size_t>(interior[k])];
+  }
+  fix.col.resize(static_cast<size_t>(countsToStarts(fix.ptr)));
+  fix.val.resize(fix.col.size());
+  row = 0;
+  for (size_t k = 0; k < interior.size(); ++k) {
+    if (touching[k] == 0) continue;
+    int64_t e = fix.ptr[row++];
+    for (SparseIt it(a, interior[k]); it; ++it) {
       const int jb = system.boundaryOfUnknown[static_cast<size_t>(it.row())];
       if (jb < 0) continue;
-      fix.col.push_back(jb);
-      fix.val.push_back(it.value());
+      fix.col[static_cast<size_t>(e)] = jb;
+      fix.val[static_cast<size_t>(e++)] = it.value();
     }
-    fix.ptr.push_back(static_cast<int64_t>(fix.col.size()));
-    system.fixupSlots.push_back(level.slotOfUnknown[static_cast<size_t>(u)]);
   }
 }
 
@@ -140,8 +181,11 @@ void classifyLevel(const GridLevel& level, const Eigen::SparseMatrix<double>& pa
   });
   system.kind.assign(static_cast<size_t>(level.slotCount), SlotKind::Empty);
   system.boundaryOfUnknown.assign(static_cast<size_t>(n), -1);
+  const auto interiorCount = static_cast<size_t>(std::count(interior.begin(), interior.end(), 1));
   system.boundarySlots.clear();
+  system.boundarySlots.reserve(static_cast<size_t>(n) - interiorCount);
   system.interiorUnknowns.clear();
+  system.interiorUnknowns.reserve(interiorCount);
   for (int u = 0; u < n; ++u) {
     const size_t su = static_cast<size_t>(u);
     const int64_t slot = level.slotOfUnknown[su];
@@ -163,28 +207,32 @@ void classifyLevel(const GridLevel& level, const Eigen::SparseMatrix<double>& pa
 
 void assignBoundary(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
                     LevelSystem& system) {
-  SlotCsr& off = system.offBlock;
-  SlotCsr& full = system.fullRows;
-  off = {};
-  full = {};
-  off.ptr.push_back(0);
-  full.ptr.push_back(0);
-  for (int j = 0; j < system.boundaryCount(); ++j) {
-    const int u = level.unknownOfSlot[static_cast<size_t>(system.boundarySlots[static_cast<size_t>(j)])];
+  // Counted first so every array is allocated once at its exact size, then filled on all cores.
+  const int nb = system.boundaryCount();
+  SlotCsr& rows = system.boundaryRows;
+  rows.ptr.assign(static_cast<size_t>(nb) + 1, 0);
+  system.offBlockEnd.resize(static_cast<size_t>(nb));
+  tbb::parallel_for(0, nb, [&](int j) {
+    const int u = unknownOfBoundary(level, system, j);
+    const int64_t offCount = countEntries(a, u, system, false);
+    rows.ptr[static_cast<size_t>(j) + 1] = offCount + countEntries(a, u, system, true);
+    system.offBlockEnd[static_cast<size_t>(j)] = offCount;  // a count until the fill below
+  });
+  rows.col.resize(static_cast<size_t>(countsToStarts(rows.ptr)));
+  rows.val.resize(rows.col.size());
+  tbb::parallel_for(0, nb, [&](int j) {
+    const size_t sj = static_cast<size_t>(j);
+    const int u = unknownOfBoundary(level, system, j);
+    int64_t off = rows.ptr[sj], on = off + system.offBlockEnd[sj];
+    system.offBlockEnd[sj] = on;
     for (SparseIt it(a, u); it; ++it) {
-      const int64_t slot = level.slotOfUnknown[static_cast<size_t>(it.row())];
-      full.col.push_back(slot);
-      full.val.push_back(it.value());
-      if (system.boundaryOfUnknown[static_cast<size_t>(it.row())] < 0) {
-        off.col.push_back(slot);
-        off.val.push_back(it.value());
-      }
+      int64_t& e = system.boundaryOfUnknown[static_cast<size_t>(it.row())] < 0 ? off : on;
+      rows.col[static_cast<size_t>(e)] = level.slotOfUnknown[static_cast<size_t>(it.row())];
+      rows.val[static_cast<size_t>(e++)] = it.value();
     }
-    off.ptr.push_back(static_cast<int64_t>(off.col.size()));
-    full.ptr.push_back(static_cast<int64_t>(full.col.size()));
-  }
+  });
   assignInteriorNextToBoundary(level, a, system);
-  if (system.boundaryCount() > 0) system.boundarySolver.factorize(boundaryBlock(level, a, system));
+  if (nb > 0) system.boundarySolver.factorize(boundaryBlock(level, a, system));
 }
 
 template <typename T>

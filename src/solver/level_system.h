@@ -65,8 +65,10 @@ struct LevelSystem {
   int64_t stencilSize = 0;                 ///< coefficients over all runs (kStencilPlanes per slot)
   int64_t nonZeros = 0;                    ///< non-zeros of A^l
   int64_t boundaryNonZeros = 0;            ///< non-zeros of A_bb^l
-  SlotCsr offBlock;                        ///< A_bi^l: boundary rows, non-boundary columns
-  SlotCsr fullRows;                        ///< [A_bi^l A_bb^l]: complete boundary rows
+  /// [A_bi^l A_bb^l]: the complete boundary rows, each with its A_bi^l entries (non-boundary
+  /// columns) first, up to offBlockEnd, then its A_bb^l entries (one copy serves both blocks).
+  SlotCsr boundaryRows;
+  std::vector<int64_t> offBlockEnd;        ///< per boundary row: end of its A_bi^l entries
   /// A_ib^l: per slot of fixupSlots (interior slots with a boundary neighbour), its entries with
   /// the compact boundary index as column.
   SlotCsr interiorNextToBoundary;
