@@ -30,7 +30,9 @@ void runFilter(FilterArgs args) {
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
   timer.lap("read");
+  // Only a beta map (S_beta) re-assembles the stiffness; otherwise the piece integrals go.
   OperatorOptions operatorOptions;
+  operatorOptions.keepPieceIntegrals = !args.betaMap.empty();
   if (args.basis == "bilinear") {
     operatorOptions.basis = fem::BasisKind::Bilinear;
     operatorOptions.seamContinuityWeight = args.seamWeight;

@@ -137,7 +137,8 @@ void runGeodesic(GeodesicArgs args) {
                               " vertices (0-based)");
   const auto [width, height] = chooseResolution(args, mesh);
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), width, height, {}, progress);
+  const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
+                           progress);
   requireUvSourcesOnCharts(domain, sources, args.mesh);
   timer.lap("operators");
   reportProgress(progress, "geodesic", 0.0);

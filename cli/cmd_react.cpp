@@ -50,7 +50,8 @@ void runReact(ReactArgs args) {
   const ProgressCallback progress = terminalProgress(!args.report.quiet);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), width, height, {}, progress);
+  const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
+                           progress);
   timer.lap("operators");
   const ReactionResult result = reactionDiffusion(domain, args.options, args.steps, progress);
   timer.lap("steps");

@@ -20,7 +20,8 @@ void runSeams(const SeamsArgs& args) {
   const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
   const Image mask = args.mask.empty() ? Image() : readImage(args.mask);
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), texture.width, texture.height, {},
+  const TexelDomain domain(std::move(mesh), texture.width, texture.height,
+                           OperatorOptions::assembledOnce(),
                            terminalProgress(!args.report.quiet));
   timer.lap("operators");
   const SeamsResult result = smoothSeams(domain, texture, mask);

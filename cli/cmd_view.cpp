@@ -55,7 +55,12 @@ void runView(ViewArgs& args) {
                             "); resample the texture first");
   const int32_t faces = static_cast<int32_t>(mesh.faceCount());
   std::cerr << "texgrad view: building the " << width << "x" << height << " texel domain...\n";
-  TexelDomain domain(std::move(mesh), width, height, {}, terminalProgress(true));
+  // The filter brush (S_beta), LIC (its metric) and stitch (S_beta) re-assemble; the geodesic
+  // and reaction-diffusion apps use M and S only.
+  OperatorOptions operatorOptions;
+  operatorOptions.keepPieceIntegrals =
+      kind != viewer::ViewerAppKind::Geodesic && kind != viewer::ViewerAppKind::React;
+  TexelDomain domain(std::move(mesh), width, height, operatorOptions, terminalProgress(true));
   viewer::ViewerSession session(viewer::makeViewerApp(kind, domain, texture, args.appOptions),
                                 faces, args.session);
   viewer::ViewerServer server(session, domain, args.server);

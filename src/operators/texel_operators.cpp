@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "texel_operators_impl.h"
 #include "texgrad/core/error.h"
@@ -50,6 +51,12 @@ void OperatorOptions::validate() const {
     throw InvalidInputError(
         "OperatorOptions.seamContinuityWeight applies to the Bilinear basis only (the "
         "seam-continuous basis has no seam jumps to penalise); set it to 0 or choose Bilinear");
+}
+
+OperatorOptions OperatorOptions::assembledOnce() {
+  OperatorOptions options;
+  options.keepPieceIntegrals = false;
+  return options;
 }
 
 int TexelOperators::Impl::band(int cellY) const { return (cellY + 1) / kBandRows; }
@@ -291,12 +298,33 @@ TexelOperators::TexelOperators(const TexturedMesh& mesh, const Atlas& atlas,
   impl_->buildPattern();
   reportProgress(progress, "assemble", 0.8);
   setMetric(fem::immersionMetric(mesh, grid, &impl_->report.metric));
+  if (!options.keepPieceIntegrals) impl_->releasePieces();
   reportProgress(progress, "assemble", 1.0);
+}
+
+void TexelOperators::Impl::releasePieces() {
+  freeStorage(full);
+  freeStorage(partial);
+  freeStorage(seam);
+  freeStorage(seamTexels);
+  freeStorage(seamValues);
+  freeStorage(fullBandBegin);
+  freeStorage(partialBandBegin);
+  piecesReleased = true;
+}
+
+void TexelOperators::Impl::requirePieces(const char* caller) const {
+  if (piecesReleased)
+    throw InvalidInputError(std::string(caller) +
+                            ": these operators were built with "
+                            "OperatorOptions::keepPieceIntegrals = false, so they cannot be "
+                            "re-assembled; build them with keepPieceIntegrals = true");
 }
 
 TexelOperators::~TexelOperators() = default;
 
 void TexelOperators::setMetric(std::vector<Eigen::Matrix2d> metric) {
+  impl_->requirePieces("setMetric");
   if (static_cast<int>(metric.size()) != impl_->basis.faceCount())
     throw InvalidInputError("setMetric: expected one 2x2 metric per face (" +
                             std::to_string(impl_->basis.faceCount()) + "), got " +
@@ -352,6 +380,7 @@ SparseMatrixd TexelOperators::modulatedStiffness(std::span<const double> betaPer
   const TexelGrid& grid = impl_->basis.grid();
   if (betaPerCell.size() != static_cast<size_t>(grid.nx + 1) * (grid.ny + 1))
     throw InvalidInputError("modulatedStiffness: expected one beta per grid cell");
+  impl_->requirePieces("modulatedStiffness");
   SparseMatrixd s;
   impl_->assemble(betaPerCell.data(), nullptr, &s);
   return s;

@@ -41,6 +41,10 @@ struct TexelOperators::Impl {
   /// C of the soft seam-continuity energy (zero for the seam-continuous basis).
   void buildSeamContinuity();
   void assemble(const double* beta, SparseMatrixd* mass, SparseMatrixd* stiffness);
+  /// Frees the piece integrals (OperatorOptions::keepPieceIntegrals = false).
+  void releasePieces();
+  /// Throws InvalidInputError naming `caller` if the piece integrals were freed.
+  void requirePieces(const char* caller) const;
   int band(int cellY) const;
   /// Sets `out` to the shared sparsity pattern (that of `mass`, explicit zeros kept) with zero
   /// values; `out` may be `mass` itself (then only the values are cleared).
@@ -60,6 +64,7 @@ struct TexelOperators::Impl {
   std::vector<int64_t> fullBandBegin, partialBandBegin;
   int bandCount = 0;
   std::vector<uint8_t> cellCovered;  ///< per grid cell: some piece has positive area
+  bool piecesReleased = false;       ///< releasePieces() ran: no re-assembly possible
   SparseMatrixd mass, stiffness;
   SparseMatrixd seamContinuity;  ///< E_C(x) = x^T C x (paper Sec. 4.2)
 };

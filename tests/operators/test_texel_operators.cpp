@@ -163,6 +163,27 @@ TEST(TexelOperators, ModulatedStiffnessAndDeterminism) {
   EXPECT_LE((sum - c).norm(), 1e-14 * c.norm());
 }
 
+TEST(TexelOperators, AssembledOnceKeepsMAndSButRefusesToReassemble) {
+  const TexturedMesh mesh = test::twoChartSquare(5);
+  const Built kept = build(mesh, 64);
+  const Built once = build(mesh, 64, OperatorOptions::assembledOnce());
+  // Freeing the piece integrals after the assembly leaves M and S bit for bit as they were.
+  for (auto get : {&TexelOperators::mass, &TexelOperators::stiffness}) {
+    const SparseMatrixd& a = (*kept.ops.*get)();
+    const SparseMatrixd& b = (*once.ops.*get)();
+    ASSERT_EQ(a.nonZeros(), b.nonZeros());
+    EXPECT_TRUE(std::equal(a.valuePtr(), a.valuePtr() + a.nonZeros(), b.valuePtr()));
+    EXPECT_TRUE(std::equal(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros(),
+                           b.innerIndexPtr()));
+  }
+  // Re-assembly would need them: a clear error instead of operators summed over nothing.
+  const std::vector<double> beta(size_t(once.grid.nx + 1) * (once.grid.ny + 1), 1.0);
+  EXPECT_THROW(once.ops->modulatedStiffness(beta), InvalidInputError);
+  EXPECT_THROW(once.ops->setMetric(once.ops->metric()), InvalidInputError);
+  EXPECT_EQ(once.ops->mass().nonZeros(), kept.ops->mass().nonZeros());  // left as they were
+  EXPECT_NO_THROW(kept.ops->modulatedStiffness(beta));
+}
+
 TEST(TexelOperators, ProjectionConverges) {
   // f = sin(3x) cos(2y) on the flat two-chart square (unit area, smooth across the seam).
   auto f = [](const Eigen::Vector3d& p) { return std::sin(3 * p.x()) * std::cos(2 * p.y()); };

@@ -30,8 +30,15 @@ struct OperatorOptions {
   /// seam-continuous basis needs none); larger values pull the two sides of every seam together.
   double seamContinuityWeight = 0.0;
   int facesPerTask = 64;  ///< faces per parallel task; fixed so results do not depend on threads
+  /// Keep the per-piece integrals after the first assembly, so that setMetric() and
+  /// modulatedStiffness() can re-assemble; false frees them (about 70 bytes per active texel,
+  /// 140 MB for spot at 2048²) for callers that only use M, S and the products below.
+  bool keepPieceIntegrals = true;
   /// Checks the options; throws InvalidInputError naming the bad field.
   void validate() const;
+  /// Defaults for callers that never re-assemble (no setMetric or modulatedStiffness): the
+  /// piece integrals are freed once M and S are assembled.
+  static OperatorOptions assembledOnce();
 };
 
 /// A scalar signal on the surface (psi of paper Sec. 5.3), evaluated at points of M.
@@ -63,7 +70,8 @@ class TexelOperators {
   TexelOperators& operator=(const TexelOperators&) = delete;
 
   /// Replaces the per-face metric (SPD 2x2 in texel coordinates, one per face; faces with zero UV
-  /// area are ignored) and re-assembles M and S (no clipping or integration is redone).
+  /// area are ignored) and re-assembles M and S (no clipping or integration is redone). Throws
+  /// InvalidInputError if the operators were built with keepPieceIntegrals = false.
   void setMetric(std::vector<Eigen::Matrix2d> metric);
   /// Current per-face metric.
   const std::vector<Eigen::Matrix2d>& metric() const;
@@ -83,7 +91,8 @@ class TexelOperators {
   /// (paper Sec. 4.2 and 5.3); the right-hand side alpha mass_h(psi) + div_h(omega) is unchanged.
   SparseMatrixd screenedSystem(double alpha) const;
   /// sum_c beta_c S_c with S_c the stiffness integrated over cell c only (paper Sec. 7.1);
-  /// beta is indexed by TexelGrid::cellIndex. Same pattern as stiffness().
+  /// beta is indexed by TexelGrid::cellIndex. Same pattern as stiffness(). Needs the piece
+  /// integrals (OperatorOptions::keepPieceIntegrals).
   SparseMatrixd modulatedStiffness(std::span<const double> betaPerCell) const;
 
   /// Texel pairs A: (s, t), s < t, whose supports overlap (structural off-diagonals of S),
