@@ -141,12 +141,12 @@ Eigen::MatrixXd solveLogIllumination(int sources, int channels,
   return result;
 }
 
-std::vector<GainLink> compositeGainLinks(const Eigen::SparseMatrix<double>& coupling,
+std::vector<GainLink> compositeGainLinks(const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
                                          const std::vector<int32_t>& labels,
                                          const Eigen::MatrixXd& values, int channels) {
   RatioSamples samples(channels);
   for (int u = 0; u < coupling.outerSize(); ++u)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(coupling, u); it; ++it) {
+    for (Eigen::Ref<const Eigen::SparseMatrix<double>>::InnerIterator it(coupling, u); it; ++it) {
       const auto v = static_cast<int>(it.row());
       const int32_t la = labels[static_cast<size_t>(u)], lb = labels[static_cast<size_t>(v)];
       if (v <= u || la == 0 || lb == 0 || la == lb) continue;
@@ -202,14 +202,14 @@ bool makeSample(int a, int b, const Eigen::Ref<const Eigen::RowVectorXd>& xa,
 
 }  // namespace
 
-std::vector<ShadingSample> compositeShadingSamples(const Eigen::SparseMatrix<double>& coupling,
+std::vector<ShadingSample> compositeShadingSamples(const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
                                                    const std::vector<int32_t>& labels,
                                                    const Eigen::MatrixXd& values,
                                                    const Eigen::MatrixX3d& normals, int channels) {
   std::vector<ShadingSample> samples;
   ShadingSample s;
   for (int u = 0; u < coupling.outerSize(); ++u)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(coupling, u); it; ++it) {
+    for (Eigen::Ref<const Eigen::SparseMatrix<double>>::InnerIterator it(coupling, u); it; ++it) {
       const auto v = static_cast<int>(it.row());
       const int32_t la = labels[static_cast<size_t>(u)], lb = labels[static_cast<size_t>(v)];
       if (v <= u || la == 0 || lb == 0 || la == lb) continue;

@@ -46,14 +46,14 @@ SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const I
   // and the right-hand side -S_FK x_K.
   std::vector<Eigen::Triplet<double>> entries;
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(nf, x.cols());
-  const double tiny = 1e-9 * ops.stiffness().diagonal().mean() / ops.mass().diagonal().mean();
-  const Eigen::SparseMatrix<double>& s = ops.stiffness();
+  const SparseViewd s = ops.stiffness();
+  const double tiny = 1e-9 * meanDiagonal(s) / meanDiagonal(ops.mass());
   const Eigen::SparseMatrix<double>& m = ops.mass();
   for (int k = 0; k < s.outerSize(); ++k) {
     const int32_t fk = freeIndex[k];
     if (fk < 0) continue;
     Eigen::SparseMatrix<double>::InnerIterator mi(m, k);
-    for (Eigen::SparseMatrix<double>::InnerIterator it(s, k); it; ++it) {
+    for (SparseViewd::InnerIterator it(s, k); it; ++it) {
       const int32_t fr = freeIndex[it.row()];
       double massValue = 0.0;
       while (mi && mi.row() < it.row()) ++mi;

@@ -85,7 +85,7 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
 /// (on cells a chart boundary crosses, where seams couple the two sides) every unknown that
 /// shares a stiffness entry with a corner. Calls f(cell, list).
 template <typename F>
-void forEachCoveredCell(const TexelGrid& g, const Eigen::SparseMatrix<double>& s, F&& f) {
+void forEachCoveredCell(const TexelGrid& g, const SparseViewd& s, F&& f) {
   std::vector<int32_t> texels;
   for (int b = -1; b < g.ny; ++b)
     for (int a = -1; a < g.nx; ++a) {
@@ -99,7 +99,7 @@ void forEachCoveredCell(const TexelGrid& g, const Eigen::SparseMatrix<double>& s
                                 : -1;
           texels.push_back(u);
           if (u < 0 || g.cellCoverage[cell] == CellCoverage::Full) continue;
-          for (Eigen::SparseMatrix<double>::InnerIterator it(s, u); it; ++it)
+          for (SparseViewd::InnerIterator it(s, u); it; ++it)
             texels.push_back(static_cast<int32_t>(it.row()));
         }
       f(cell, texels);
@@ -150,7 +150,7 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
     Eigen::VectorXd texelsPerSource = Eigen::VectorXd::Zero(sources);
     for (int32_t label : labels)
       if (label > 0) texelsPerSource[label - 1] += 1.0;
-    const Eigen::SparseMatrix<double>& coupling = domain.operators().stiffness();
+    const SparseViewd coupling = domain.operators().stiffness();
     if (options.compensateIllumination) {
       const Eigen::MatrixX3d normals = texelNormals(domain);
       illumination = solveLogIllumination(

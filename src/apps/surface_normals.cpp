@@ -81,11 +81,11 @@ Eigen::MatrixX3d texelNormals(const TexelDomain& domain) {
       known[static_cast<size_t>(u)] = 1;
     }
   });
-  const Eigen::SparseMatrix<double>& s = domain.operators().stiffness();
+  const SparseViewd s = domain.operators().stiffness();
   for (Eigen::Index u = 0; u < n; ++u) {
     if (known[static_cast<size_t>(u)]) continue;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (Eigen::SparseMatrix<double>::InnerIterator it(s, u); it; ++it)
+    for (SparseViewd::InnerIterator it(s, u); it; ++it)
       if (known[static_cast<size_t>(it.row())]) sum += normals.row(it.row()).transpose();
     if (sum.norm() > 0.0) normals.row(u) = sum.normalized().transpose();
   }

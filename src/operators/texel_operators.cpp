@@ -53,6 +53,15 @@ void OperatorOptions::validate() const {
         "seam-continuous basis has no seam jumps to penalise); set it to 0 or choose Bilinear");
 }
 
+double meanDiagonal(const SparseRefd& a) {
+  if (a.rows() == 0) return 0.0;
+  double sum = 0.0;
+  for (Eigen::Index j = 0; j < a.outerSize(); ++j)
+    for (SparseRefd::InnerIterator it(a, j); it; ++it)
+      if (it.row() == j) sum += it.value();
+  return sum / static_cast<double>(a.rows());
+}
+
 OperatorOptions OperatorOptions::assembledOnce() {
   OperatorOptions options;
   options.keepPieceIntegrals = false;
@@ -60,11 +69,6 @@ OperatorOptions OperatorOptions::assembledOnce() {
 }
 
 int TexelOperators::Impl::band(int cellY) const { return (cellY + 1) / kBandRows; }
-
-void TexelOperators::Impl::resetToPattern(SparseMatrixd& out) const {
-  if (&out != &mass) out = mass;  // copy-assignment: one allocation, no temporary
-  std::fill(out.valuePtr(), out.valuePtr() + out.nonZeros(), 0.0);
-}
 
 void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
   const int faces = basis.faceCount();
@@ -223,12 +227,13 @@ void TexelOperators::Impl::buildPattern() {
 
 namespace {
 
-/// Adds local (k x k) values into column-major CSC storage at (row texels[j], column texels[i]).
+/// Adds local (k x k) values into the values of a matrix with the pattern of `m` (column-major
+/// CSC) at (row texels[j], column texels[i]).
 template <typename Local>
-void scatter(SparseMatrixd& m, const int32_t* texels, int k, const Local& local, double scale) {
+void scatter(const SparseMatrixd& m, double* values, const int32_t* texels, int k,
+             const Local& local, double scale) {
   const int* outer = m.outerIndexPtr();
   const int* inner = m.innerIndexPtr();
-  double* values = m.valuePtr();
   for (int i = 0; i < k; ++i) {
     if (texels[i] < 0) continue;
     const int* begin = inner + outer[texels[i]];
@@ -243,21 +248,20 @@ void scatter(SparseMatrixd& m, const int32_t* texels, int k, const Local& local,
 
 }  // namespace
 
-void TexelOperators::Impl::assemble(const double* beta, SparseMatrixd* massOut,
-                                    SparseMatrixd* stiffnessOut) {
+void TexelOperators::Impl::assemble(const double* beta, double* massOut,
+                                    double* stiffnessOut) {
   const TexelGrid& grid = basis.grid();
-  // Stiffness first: it copies the pattern from `mass`, which may be re-assembled in place.
-  if (stiffnessOut) resetToPattern(*stiffnessOut);
-  if (massOut) resetToPattern(*massOut);
+  for (double* out : {massOut, stiffnessOut})
+    if (out) std::fill_n(out, mass.nonZeros(), 0.0);
   static const detail::BilinearIntegrals unit = detail::bilinearIntegrals(detail::unitCellMoments());
   auto cellBeta = [&](int a, int b) { return beta ? beta[grid.cellIndex(a, b)] : 1.0; };
   auto plain = [&](int face, int a, int b, const detail::BilinearIntegrals& in) {
     const FaceFactors& f = factors[face];
     const auto texels = basis.cellTexels(a, b);
-    if (massOut) scatter(*massOut, texels.data(), 4, in.mass, f.mass);
+    if (massOut) scatter(mass, massOut, texels.data(), 4, in.mass, f.mass);
     if (stiffnessOut) {
       const Eigen::Matrix4d s = f.xx * in.kxx + f.xy * in.kxy + f.yy * in.kyy;
-      scatter(*stiffnessOut, texels.data(), 4, s, cellBeta(a, b));
+      scatter(mass, stiffnessOut, texels.data(), 4, s, cellBeta(a, b));
     }
   };
   for (int colour = 0; colour < 2; ++colour) {
@@ -277,13 +281,13 @@ void TexelOperators::Impl::assemble(const double* beta, SparseMatrixd* massOut,
     const double* v = seamValues.data() + sp.valueBegin;
     const int packed = k * (k + 1) / 2;
     if (massOut)
-      scatter(*massOut, seamTexels.data() + sp.texelBegin, k, PackedSymmetric{v}, f.mass);
+      scatter(mass, massOut, seamTexels.data() + sp.texelBegin, k, PackedSymmetric{v}, f.mass);
     if (stiffnessOut) {
       combined.resize(static_cast<size_t>(packed));
       for (int i = 0; i < packed; ++i)
         combined[i] = f.xx * v[packed + i] + f.xy * v[2 * packed + i] + f.yy * v[3 * packed + i];
-      scatter(*stiffnessOut, seamTexels.data() + sp.texelBegin, k, PackedSymmetric{combined.data()},
-              cellBeta(sp.cellX, sp.cellY));
+      scatter(mass, stiffnessOut, seamTexels.data() + sp.texelBegin, k,
+              PackedSymmetric{combined.data()}, cellBeta(sp.cellX, sp.cellY));
     }
   }
 }
@@ -341,36 +345,32 @@ void TexelOperators::setMetric(std::vector<Eigen::Matrix2d> metric) {
     impl_->factors[f] = {root, root * g(1, 1) / det, -root * g(0, 1) / det, root * g(0, 0) / det};
   }
   impl_->metric = std::move(metric);
-  impl_->assemble(nullptr, &impl_->mass, &impl_->stiffness);
+  impl_->stiffnessValues.resize(static_cast<size_t>(impl_->mass.nonZeros()));
+  impl_->assemble(nullptr, impl_->mass.valuePtr(), impl_->stiffnessValues.data());
   impl_->buildSeamContinuity();
 }
 
 const std::vector<Eigen::Matrix2d>& TexelOperators::metric() const { return impl_->metric; }
 const SparseMatrixd& TexelOperators::mass() const { return impl_->mass; }
-const SparseMatrixd& TexelOperators::stiffness() const { return impl_->stiffness; }
+SparseViewd TexelOperators::stiffness() const {
+  const SparseMatrixd& m = impl_->mass;
+  return SparseViewd(m.rows(), m.cols(), m.nonZeros(), m.outerIndexPtr(), m.innerIndexPtr(),
+                     impl_->stiffnessValues.data());
+}
 const SparseMatrixd& TexelOperators::seamContinuity() const { return impl_->seamContinuity; }
 const fem::TexelBasis& TexelOperators::basis() const { return impl_->basis; }
 const OperatorReport& TexelOperators::report() const { return impl_->report; }
 
 SparseMatrixd TexelOperators::screenedSystem(double alpha) const {
-  const SparseMatrixd& m = impl_->mass;
-  const SparseMatrixd& s = impl_->stiffness;
-  const bool samePattern =
-      m.isCompressed() && s.isCompressed() && m.nonZeros() == s.nonZeros() &&
-      std::equal(m.outerIndexPtr(), m.outerIndexPtr() + m.outerSize() + 1, s.outerIndexPtr()) &&
-      std::equal(m.innerIndexPtr(), m.innerIndexPtr() + m.nonZeros(), s.innerIndexPtr());
-  SparseMatrixd system;
-  if (samePattern) {  // M and S share the pair pattern: combine values, no sparse merge
-    system = s;
-    double* out = system.valuePtr();
-    const double* mv = m.valuePtr();
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, system.nonZeros(), 1 << 16),
-                      [&](const tbb::blocked_range<Eigen::Index>& r) {
-                        for (Eigen::Index k = r.begin(); k != r.end(); ++k) out[k] += alpha * mv[k];
-                      });
-  } else {
-    system = alpha * m + s;
-  }
+  // M and S share one pattern: copy M's and combine the values (no sparse merge).
+  SparseMatrixd system = impl_->mass;
+  double* out = system.valuePtr();
+  const double* sv = impl_->stiffnessValues.data();
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, system.nonZeros(), 1 << 16),
+                    [&](const tbb::blocked_range<Eigen::Index>& r) {
+                      for (Eigen::Index k = r.begin(); k != r.end(); ++k)
+                        out[k] = alpha * out[k] + sv[k];
+                    });
   if (impl_->options.seamContinuityWeight != 0.0)
     system += (alpha * impl_->options.seamContinuityWeight) * impl_->seamContinuity;
   return system;
@@ -381,8 +381,8 @@ SparseMatrixd TexelOperators::modulatedStiffness(std::span<const double> betaPer
   if (betaPerCell.size() != static_cast<size_t>(grid.nx + 1) * (grid.ny + 1))
     throw InvalidInputError("modulatedStiffness: expected one beta per grid cell");
   impl_->requirePieces("modulatedStiffness");
-  SparseMatrixd s;
-  impl_->assemble(betaPerCell.data(), nullptr, &s);
+  SparseMatrixd s = impl_->mass;  // the shared pattern; assemble overwrites the values
+  impl_->assemble(betaPerCell.data(), nullptr, s.valuePtr());
   return s;
 }
 
@@ -411,7 +411,7 @@ SparseMatrixd TexelOperators::differential() const {
 MassStiffness buildMassStiffness(const TexturedMesh& mesh, const Atlas& atlas,
                                  const TexelGrid& grid, const OperatorOptions& options) {
   TexelOperators ops(mesh, atlas, grid, options);
-  return {ops.mass(), ops.stiffness()};
+  return {ops.mass(), SparseMatrixd(ops.stiffness())};
 }
 
 }  // namespace texgrad

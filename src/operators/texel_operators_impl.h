@@ -40,15 +40,14 @@ struct TexelOperators::Impl {
   void buildPattern();
   /// C of the soft seam-continuity energy (zero for the seam-continuous basis).
   void buildSeamContinuity();
-  void assemble(const double* beta, SparseMatrixd* mass, SparseMatrixd* stiffness);
+  /// Sums the pieces into the values of M and S_beta (beta per cell, or 1 where null) on the
+  /// shared pattern (`mass`'s index arrays); either output may be null.
+  void assemble(const double* beta, double* massValues, double* stiffnessValues);
   /// Frees the piece integrals (OperatorOptions::keepPieceIntegrals = false).
   void releasePieces();
   /// Throws InvalidInputError naming `caller` if the piece integrals were freed.
   void requirePieces(const char* caller) const;
   int band(int cellY) const;
-  /// Sets `out` to the shared sparsity pattern (that of `mass`, explicit zeros kept) with zero
-  /// values; `out` may be `mass` itself (then only the values are cleared).
-  void resetToPattern(SparseMatrixd& out) const;
 
   OperatorOptions options;
   fem::TexelBasis basis;
@@ -65,7 +64,8 @@ struct TexelOperators::Impl {
   int bandCount = 0;
   std::vector<uint8_t> cellCovered;  ///< per grid cell: some piece has positive area
   bool piecesReleased = false;       ///< releasePieces() ran: no re-assembly possible
-  SparseMatrixd mass, stiffness;
+  SparseMatrixd mass;  ///< M; its index arrays are the pattern of every assembled matrix
+  std::vector<double> stiffnessValues;  ///< S on mass's pattern (TexelOperators::stiffness())
   SparseMatrixd seamContinuity;  ///< E_C(x) = x^T C x (paper Sec. 4.2)
 };
 

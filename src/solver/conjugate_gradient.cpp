@@ -32,8 +32,8 @@ void CgOptions::validate() const {
   if (!(tolerance >= 0.0)) throw InvalidInputError("CG tolerance must be >= 0");
 }
 
-void symmetricProduct(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& x,
-                      Eigen::MatrixXd& y) {
+void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
+                      const Eigen::MatrixXd& x, Eigen::MatrixXd& y) {
   y.resize(a.rows(), x.cols());
   const Eigen::Index k = x.cols();
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, a.outerSize(), 1024),
@@ -41,7 +41,7 @@ void symmetricProduct(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixX
     for (Eigen::Index j = range.begin(); j != range.end(); ++j) {
       for (Eigen::Index c = 0; c < k; ++c) {
         double acc = 0.0;
-        for (Eigen::SparseMatrix<double>::InnerIterator it(a, j); it; ++it)
+        for (Eigen::Ref<const Eigen::SparseMatrix<double>>::InnerIterator it(a, j); it; ++it)
           acc += it.value() * x(it.row(), c);
         y(j, c) = acc;
       }

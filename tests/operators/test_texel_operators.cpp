@@ -52,7 +52,7 @@ TEST(TexelOperators, BasicInvariants) {
   for (const auto& c : cases()) {
     const Built b = build(c.mesh, c.resolution);
     const SparseMatrixd& m = b.ops->mass();
-    const SparseMatrixd& s = b.ops->stiffness();
+    const SparseMatrixd s(b.ops->stiffness());  // a copy: the test uses its diagonal()
     const Eigen::VectorXd one = Eigen::VectorXd::Ones(m.rows());
     EXPECT_EQ(b.ops->report().unexpectedCrossings, 0) << c.name;
     EXPECT_NEAR(one.dot(m * one), 1.0, 1e-9) << c.name;
@@ -168,20 +168,37 @@ TEST(TexelOperators, AssembledOnceKeepsMAndSButRefusesToReassemble) {
   const Built kept = build(mesh, 64);
   const Built once = build(mesh, 64, OperatorOptions::assembledOnce());
   // Freeing the piece integrals after the assembly leaves M and S bit for bit as they were.
-  for (auto get : {&TexelOperators::mass, &TexelOperators::stiffness}) {
-    const SparseMatrixd& a = (*kept.ops.*get)();
-    const SparseMatrixd& b = (*once.ops.*get)();
+  auto expectIdentical = [](const SparseRefd& a, const SparseRefd& b) {
     ASSERT_EQ(a.nonZeros(), b.nonZeros());
     EXPECT_TRUE(std::equal(a.valuePtr(), a.valuePtr() + a.nonZeros(), b.valuePtr()));
     EXPECT_TRUE(std::equal(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros(),
                            b.innerIndexPtr()));
-  }
+  };
+  expectIdentical(kept.ops->mass(), once.ops->mass());
+  expectIdentical(kept.ops->stiffness(), once.ops->stiffness());
   // Re-assembly would need them: a clear error instead of operators summed over nothing.
   const std::vector<double> beta(size_t(once.grid.nx + 1) * (once.grid.ny + 1), 1.0);
   EXPECT_THROW(once.ops->modulatedStiffness(beta), InvalidInputError);
   EXPECT_THROW(once.ops->setMetric(once.ops->metric()), InvalidInputError);
   EXPECT_EQ(once.ops->mass().nonZeros(), kept.ops->mass().nonZeros());  // left as they were
   EXPECT_NO_THROW(kept.ops->modulatedStiffness(beta));
+}
+
+TEST(TexelOperators, StiffnessSharesTheMassPatternAndMatchesItsOwnAssembly) {
+  const Built b = build(test::cubeSphere(4), 48);
+  const SparseMatrixd& m = b.ops->mass();
+  const SparseViewd s = b.ops->stiffness();
+  // One index array for both matrices (the memory this layout exists for).
+  EXPECT_EQ(s.innerIndexPtr(), m.innerIndexPtr());
+  EXPECT_EQ(s.outerIndexPtr(), m.outerIndexPtr());
+  EXPECT_NE(s.valuePtr(), m.valuePtr());
+  // The view reads the same matrix as S assembled on its own (beta = 1 everywhere), and
+  // screenedSystem is alpha M + S entry by entry.
+  const std::vector<double> ones(size_t(b.grid.nx + 1) * (b.grid.ny + 1), 1.0);
+  const SparseMatrixd own = b.ops->modulatedStiffness(ones);
+  EXPECT_EQ((own - SparseMatrixd(s)).norm(), 0.0);
+  const SparseMatrixd a = b.ops->screenedSystem(7.0);
+  EXPECT_LE((a - (7.0 * m + own)).norm(), 1e-15 * a.norm());
 }
 
 TEST(TexelOperators, ProjectionConverges) {

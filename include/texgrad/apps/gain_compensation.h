@@ -49,7 +49,7 @@ Eigen::MatrixXd solveLogIllumination(int sources, int channels,
 
 /// Links from a composite: pairs of coupled unknowns (non-zeros of `coupling`, e.g. the
 /// stiffness) whose source labels differ (labels 1..sources, 0 = none).
-std::vector<GainLink> compositeGainLinks(const Eigen::SparseMatrix<double>& coupling,
+std::vector<GainLink> compositeGainLinks(const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
                                          const std::vector<int32_t>& labels,
                                          const Eigen::MatrixXd& values, int channels);
 
@@ -60,7 +60,7 @@ std::vector<GainLink> partialGainLinks(const std::vector<Eigen::MatrixXd>& value
 
 /// Illumination samples from a composite: coupled unknowns with different source labels, as in
 /// compositeGainLinks; `normals` holds one unit normal per unknown. At most ~200k, evenly spread.
-std::vector<ShadingSample> compositeShadingSamples(const Eigen::SparseMatrix<double>& coupling,
+std::vector<ShadingSample> compositeShadingSamples(const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
                                                    const std::vector<int32_t>& labels,
                                                    const Eigen::MatrixXd& values,
                                                    const Eigen::MatrixX3d& normals, int channels);

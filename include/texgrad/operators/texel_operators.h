@@ -21,6 +21,13 @@ namespace texgrad {
 
 /// Sparse matrix type of all operators (column-major, int indices).
 using SparseMatrixd = Eigen::SparseMatrix<double>;
+/// Read-only view of a SparseMatrixd whose storage another object owns (the stiffness matrix
+/// shares the mass matrix's index arrays). Binding it to `const SparseMatrixd&` copies it.
+using SparseViewd = Eigen::Map<const SparseMatrixd>;
+/// Parameter type that binds a SparseMatrixd or a SparseViewd without copying either.
+using SparseRefd = Eigen::Ref<const SparseMatrixd>;
+/// Mean of the diagonal entries of a square sparse matrix (0 for an empty one).
+double meanDiagonal(const SparseRefd& a);
 
 /// Options of TexelOperators.
 struct OperatorOptions {
@@ -80,8 +87,9 @@ class TexelOperators {
   /// units of surface area (1^T M 1 = surface area, 1 for the immersion metric).
   const SparseMatrixd& mass() const;
   /// Stiffness matrix S (|T| x |T|, symmetric PSD, S 1 = 0): S_st = int sqrt|g| g^-1(dphi_s,
-  /// dphi_t) (paper Sec. 5.3 footnote 5); positive diagonal (the negative of a Laplacian).
-  const SparseMatrixd& stiffness() const;
+  /// dphi_t) (paper Sec. 5.3 footnote 5); positive diagonal (the negative of a Laplacian). A view
+  /// on mass()'s sparsity pattern with S's own values (one index array for both matrices).
+  SparseViewd stiffness() const;
   /// Seam-continuity matrix C (|T| x |T|, symmetric PSD): x^T C x = E_C = integral over the
   /// seams of (f_side0 - f_side1)^2 with respect to surface length under the current metric
   /// (paper Sec. 4.2). Zero for the seam-continuous basis, whose functions have no seam jumps.

@@ -34,8 +34,9 @@ Preconditioner multigridPreconditioner(const MultigridSolver<Scalar>& solver) {
   return [&solver](const Eigen::MatrixXd& r, Eigen::MatrixXd& z) { solver.precondition(r, z); };
 }
 
-/// y = A x for a symmetric A with both triangles stored (n x n), x and y n x k; parallel.
-void symmetricProduct(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& x,
-                      Eigen::MatrixXd& y);
+/// y = A x for a symmetric A with both triangles stored (n x n), x and y n x k; parallel. A may be
+/// a matrix or a view on one (Eigen::Map): the Ref binds to either without a copy.
+void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
+                      const Eigen::MatrixXd& x, Eigen::MatrixXd& y);
 
 }  // namespace texgrad
