@@ -21,8 +21,7 @@ void runSeams(const SeamsArgs& args) {
   const Image mask = args.mask.empty() ? Image() : readImage(args.mask);
   timer.lap("read");
   const TexelDomain domain(std::move(mesh), texture.width, texture.height,
-                           OperatorOptions::assembledOnce(),
-                           terminalProgress(!args.report.quiet));
+                           OperatorOptions::assembledOnce(), terminalProgress(!args.report.quiet));
   timer.lap("operators");
   const SeamsResult result = smoothSeams(domain, texture, mask);
   timer.lap("solve");

@@ -141,9 +141,9 @@ Eigen::MatrixXd solveLogIllumination(int sources, int channels,
   return result;
 }
 
-std::vector<GainLink> compositeGainLinks(const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
-                                         const std::vector<int32_t>& labels,
-                                         const Eigen::MatrixXd& values, int channels) {
+std::vector<GainLink> compositeGainLinks(
+    const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
+    const std::vector<int32_t>& labels, const Eigen::MatrixXd& values, int channels) {
   RatioSamples samples(channels);
   for (int u = 0; u < coupling.outerSize(); ++u)
     for (Eigen::Ref<const Eigen::SparseMatrix<double>>::InnerIterator it(coupling, u); it; ++it) {
@@ -202,10 +202,10 @@ bool makeSample(int a, int b, const Eigen::Ref<const Eigen::RowVectorXd>& xa,
 
 }  // namespace
 
-std::vector<ShadingSample> compositeShadingSamples(const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
-                                                   const std::vector<int32_t>& labels,
-                                                   const Eigen::MatrixXd& values,
-                                                   const Eigen::MatrixX3d& normals, int channels) {
+std::vector<ShadingSample> compositeShadingSamples(
+    const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
+    const std::vector<int32_t>& labels, const Eigen::MatrixXd& values,
+    const Eigen::MatrixX3d& normals, int channels) {
   std::vector<ShadingSample> samples;
   ShadingSample s;
   for (int u = 0; u < coupling.outerSize(); ++u)

@@ -248,8 +248,7 @@ void scatter(const SparseMatrixd& m, double* values, const int32_t* texels, int 
 
 }  // namespace
 
-void TexelOperators::Impl::assemble(const double* beta, double* massOut,
-                                    double* stiffnessOut) {
+void TexelOperators::Impl::assemble(const double* beta, double* massOut, double* stiffnessOut) {
   const TexelGrid& grid = basis.grid();
   for (double* out : {massOut, stiffnessOut})
     if (out) std::fill_n(out, mass.nonZeros(), 0.0);

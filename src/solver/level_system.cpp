@@ -116,7 +116,8 @@ Eigen::SparseMatrix<double> boundaryBlock(const GridLevel& level,
     throw InvalidInputError("multigrid: the boundary block has more than 2^31 non-zeros");
   Eigen::SparseMatrix<double> bb(nb, nb);
   bb.resizeNonZeros(static_cast<Eigen::Index>(total));
-  for (int j = 0; j <= nb; ++j) bb.outerIndexPtr()[j] = static_cast<int>(start[static_cast<size_t>(j)]);
+  for (int j = 0; j <= nb; ++j)
+    bb.outerIndexPtr()[j] = static_cast<int>(start[static_cast<size_t>(j)]);
   tbb::parallel_for(0, nb, [&](int j) {
     int64_t e = start[static_cast<size_t>(j)];
     for (SparseIt it(a, unknownOfBoundary(level, system, j)); it; ++it) {

@@ -171,8 +171,7 @@ TEST(TexelOperators, AssembledOnceKeepsMAndSButRefusesToReassemble) {
   auto expectIdentical = [](const SparseRefd& a, const SparseRefd& b) {
     ASSERT_EQ(a.nonZeros(), b.nonZeros());
     EXPECT_TRUE(std::equal(a.valuePtr(), a.valuePtr() + a.nonZeros(), b.valuePtr()));
-    EXPECT_TRUE(std::equal(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros(),
-                           b.innerIndexPtr()));
+    EXPECT_TRUE(std::equal(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros(), b.innerIndexPtr()));
   };
   expectIdentical(kept.ops->mass(), once.ops->mass());
   expectIdentical(kept.ops->stiffness(), once.ops->stiffness());

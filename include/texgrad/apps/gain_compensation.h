@@ -49,9 +49,9 @@ Eigen::MatrixXd solveLogIllumination(int sources, int channels,
 
 /// Links from a composite: pairs of coupled unknowns (non-zeros of `coupling`, e.g. the
 /// stiffness) whose source labels differ (labels 1..sources, 0 = none).
-std::vector<GainLink> compositeGainLinks(const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
-                                         const std::vector<int32_t>& labels,
-                                         const Eigen::MatrixXd& values, int channels);
+std::vector<GainLink> compositeGainLinks(
+    const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
+    const std::vector<int32_t>& labels, const Eigen::MatrixXd& values, int channels);
 
 /// Links from partial textures: texels that two partials both see (confidence > 0).
 std::vector<GainLink> partialGainLinks(const std::vector<Eigen::MatrixXd>& values,
@@ -60,10 +60,10 @@ std::vector<GainLink> partialGainLinks(const std::vector<Eigen::MatrixXd>& value
 
 /// Illumination samples from a composite: coupled unknowns with different source labels, as in
 /// compositeGainLinks; `normals` holds one unit normal per unknown. At most ~200k, evenly spread.
-std::vector<ShadingSample> compositeShadingSamples(const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
-                                                   const std::vector<int32_t>& labels,
-                                                   const Eigen::MatrixXd& values,
-                                                   const Eigen::MatrixX3d& normals, int channels);
+std::vector<ShadingSample> compositeShadingSamples(
+    const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
+    const std::vector<int32_t>& labels, const Eigen::MatrixXd& values,
+    const Eigen::MatrixX3d& normals, int channels);
 
 /// Illumination samples from partial textures: texels two partials both see.
 std::vector<ShadingSample> partialShadingSamples(const std::vector<Eigen::MatrixXd>& values,
