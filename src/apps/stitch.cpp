@@ -85,7 +85,7 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
 /// (on cells a chart boundary crosses, where seams couple the two sides) every unknown that
 /// shares a stiffness entry with a corner. Calls f(cell, list).
 template <typename F>
-void forEachCoveredCell(const TexelGrid& g, const SparseViewd& s, F&& f) {
+void forEachCoveredCell(const TexelGrid& g, const SparseRefd& s, F&& f) {
   std::vector<int32_t> texels;
   for (int b = -1; b < g.ny; ++b)
     for (int a = -1; a < g.nx; ++a) {
@@ -99,7 +99,7 @@ void forEachCoveredCell(const TexelGrid& g, const SparseViewd& s, F&& f) {
                                 : -1;
           texels.push_back(u);
           if (u < 0 || g.cellCoverage[cell] == CellCoverage::Full) continue;
-          for (SparseViewd::InnerIterator it(s, u); it; ++it)
+          for (SparseRefd::InnerIterator it(s, u); it; ++it)
             texels.push_back(static_cast<int32_t>(it.row()));
         }
       f(cell, texels);

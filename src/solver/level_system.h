@@ -85,7 +85,7 @@ struct LevelSystem {
 void classifyLevel(const GridLevel& level, const Eigen::SparseMatrix<double>& pattern,
                    LevelSystem& system);
 
-/// Numeric phase for the boundary: fills offBlock / fullRows and factorises A_bb^l.
+/// Numeric phase for the boundary: fills boundaryRows / offBlockEnd and factorises A_bb^l.
 void assignBoundary(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
                     LevelSystem& system);
 

@@ -64,7 +64,8 @@ struct OperatorReport {
 };
 
 /// Stateful builder: clips and integrates the metric-independent parts once, then assembles
-/// M and S for any per-face metric and S_beta = sum_c beta_c S_c for any per-cell beta cheaply.
+/// M and S for any per-face metric and S_beta = sum_c beta_c S_c for any per-cell beta cheaply
+/// (while it keeps the piece integrals: OperatorOptions::keepPieceIntegrals).
 /// Unknowns are TexelGrid::unknownOfTexel; mesh and grid must outlive the object.
 class TexelOperators {
  public:
@@ -88,7 +89,8 @@ class TexelOperators {
   const SparseMatrixd& mass() const;
   /// Stiffness matrix S (|T| x |T|, symmetric PSD, S 1 = 0): S_st = int sqrt|g| g^-1(dphi_s,
   /// dphi_t) (paper Sec. 5.3 footnote 5); positive diagonal (the negative of a Laplacian). A view
-  /// on mass()'s sparsity pattern with S's own values (one index array for both matrices).
+  /// on mass()'s sparsity pattern with S's own values (one index array for both matrices); valid
+  /// while this object lives, and setMetric() changes the values it shows in place.
   SparseViewd stiffness() const;
   /// Seam-continuity matrix C (|T| x |T|, symmetric PSD): x^T C x = E_C = integral over the
   /// seams of (f_side0 - f_side1)^2 with respect to surface length under the current metric
