@@ -46,22 +46,22 @@ SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const I
   // and the right-hand side -S_FK x_K.
   std::vector<Eigen::Triplet<double>> entries;
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(nf, x.cols());
+  const SparseMatrixd& m = ops.mass();
   const SparseViewd s = ops.stiffness();
-  const double tiny = 1e-9 * meanDiagonal(s) / meanDiagonal(ops.mass());
-  const Eigen::SparseMatrix<double>& m = ops.mass();
-  for (int k = 0; k < s.outerSize(); ++k) {
+  const double tiny = 1e-9 * meanDiagonal(s) / meanDiagonal(m);
+  // S is a view on M's pattern: entry e is the same (row, column) in both.
+  const int* outer = m.outerIndexPtr();
+  const int* inner = m.innerIndexPtr();
+  for (int k = 0; k < m.outerSize(); ++k) {
     const int32_t fk = freeIndex[k];
     if (fk < 0) continue;
-    Eigen::SparseMatrix<double>::InnerIterator mi(m, k);
-    for (SparseViewd::InnerIterator it(s, k); it; ++it) {
-      const int32_t fr = freeIndex[it.row()];
-      double massValue = 0.0;
-      while (mi && mi.row() < it.row()) ++mi;
-      if (mi && mi.row() == it.row()) massValue = mi.value();
+    for (int e = outer[k]; e < outer[k + 1]; ++e) {
+      const int row = inner[e];
+      const int32_t fr = freeIndex[row];
       if (fr >= 0)
-        entries.emplace_back(fr, fk, it.value() + tiny * massValue);
+        entries.emplace_back(fr, fk, s.valuePtr()[e] + tiny * m.valuePtr()[e]);
       else
-        rhs.row(fk) -= it.value() * x.row(it.row());
+        rhs.row(fk) -= s.valuePtr()[e] * x.row(row);
     }
   }
   Eigen::SparseMatrix<double> sff(nf, nf);
