@@ -60,7 +60,7 @@ struct Scratch {
 /// weight) entries of column j by increasing row, parents(r, f) calls f(coarse column, weight)
 /// for the entries of row r by increasing column.
 template <typename Children, typename Parents>
-Sparse galerkinColumns(const Sparse& a, Eigen::Index nc, Children children, Parents parents) {
+Sparse galerkinColumns(const SparseSum& a, Eigen::Index nc, Children children, Parents parents) {
   const Eigen::Index tasks = (nc + kColumnsPerTask - 1) / kColumnsPerTask;
   std::vector<Block> blocks(static_cast<size_t>(tasks));
   tbb::enumerable_thread_specific<Scratch> scratch;
@@ -79,8 +79,8 @@ Sparse galerkinColumns(const Sparse& a, Eigen::Index nc, Children children, Pare
       s.coarse.touched.clear();
       children(j, s.column);
       for (const auto& [row, weight] : s.column)  // (A P)_{:, j}
-        for (Sparse::InnerIterator ai(a, row); ai; ++ai)
-          s.fine.add(static_cast<int>(ai.row()), ai.value() * weight, j);
+        for (int e = a.outer()[row]; e != a.outer()[row + 1]; ++e)
+          s.fine.add(a.inner()[e], a.value(e) * weight, j);
       for (int r : s.fine.touched)  // (Pᵀ A P)_{:, j}
         parents(r, [&](int k, double weight) {
           s.coarse.add(k, weight * s.fine.value[static_cast<size_t>(r)], j);
@@ -121,16 +121,16 @@ Sparse galerkinColumns(const Sparse& a, Eigen::Index nc, Children children, Pare
 }
 
 /// Throws unless a is n x n with n = `fineUnknowns`.
-void requireSquare(const Sparse& a, Eigen::Index fineUnknowns) {
-  if (a.rows() != fineUnknowns || a.cols() != fineUnknowns)
+void requireSquare(const SparseSum& a, Eigen::Index fineUnknowns) {
+  if (a.rows() != fineUnknowns)
     throw InvalidInputError("Galerkin product: matrix is " + std::to_string(a.rows()) + " x " +
-                            std::to_string(a.cols()) + " but the fine level has " +
+                            std::to_string(a.rows()) + " but the fine level has " +
                             std::to_string(fineUnknowns) + " unknowns");
 }
 
 }  // namespace
 
-Sparse galerkinProduct(const Sparse& a, const Sparse& p) {
+Sparse galerkinProduct(const SparseSum& a, const Sparse& p) {
   requireSquare(a, p.rows());
   const RowMajor pRows = p;  // row r of P: the coarse columns fine texel r interpolates from
   return galerkinColumns(
@@ -146,7 +146,7 @@ Sparse galerkinProduct(const Sparse& a, const Sparse& p) {
       });
 }
 
-Sparse galerkinProduct(const Sparse& a, const GridLevel& fine, const GridLevel& coarse) {
+Sparse galerkinProduct(const SparseSum& a, const GridLevel& fine, const GridLevel& coarse) {
   requireSquare(a, fine.unknownCount());
   return galerkinColumns(
       a, coarse.unknownCount(),

@@ -14,8 +14,6 @@
 namespace texgrad::detail {
 namespace {
 
-using SparseIt = Eigen::SparseMatrix<double>::InnerIterator;
-
 /// Stencil index of the entry (u, v), or -1 when v is not a 3 x 3 lattice neighbour of u in u's chart.
 int stencilIndex(const GridLevel& level, int u, int v) {
   const size_t su = static_cast<size_t>(u), sv = static_cast<size_t>(v);
@@ -26,9 +24,9 @@ int stencilIndex(const GridLevel& level, int u, int v) {
   return (dy + 1) * 3 + (dx + 1);
 }
 
-bool rowIsStencil(const GridLevel& level, const Eigen::SparseMatrix<double>& pattern, int u) {
-  for (SparseIt it(pattern, u); it; ++it)
-    if (stencilIndex(level, u, static_cast<int>(it.row())) < 0) return false;
+bool rowIsStencil(const GridLevel& level, const SparseSum& pattern, int u) {
+  for (int e = pattern.outer()[u]; e != pattern.outer()[u + 1]; ++e)
+    if (stencilIndex(level, u, pattern.inner()[e]) < 0) return false;
   return true;
 }
 
@@ -84,11 +82,10 @@ int unknownOfBoundary(const GridLevel& level, const LevelSystem& system, int j) 
 
 /// Entries of column u of `a` (its row u: A is symmetric) whose row is (isBoundary true) or is
 /// not (false) a boundary unknown.
-int64_t countEntries(const Eigen::SparseMatrix<double>& a, int u, const LevelSystem& system,
-                     bool isBoundary) {
+int64_t countEntries(const SparseSum& a, int u, const LevelSystem& system, bool isBoundary) {
   int64_t count = 0;
-  for (SparseIt it(a, u); it; ++it)
-    count += (system.boundaryOfUnknown[static_cast<size_t>(it.row())] >= 0) == isBoundary;
+  for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e)
+    count += (system.boundaryOfUnknown[static_cast<size_t>(a.inner()[e])] >= 0) == isBoundary;
   return count;
 }
 
@@ -102,8 +99,7 @@ int64_t countsToStarts(std::vector<int64_t>& ptr) {
 /// A_bb^l, built in compressed form: column j of A_bb is column u(j) of A restricted to boundary
 /// rows, and boundary indices grow with the unknown index (classifyLevel), so each column's rows
 /// come out sorted without a triplet list.
-Eigen::SparseMatrix<double> boundaryBlock(const GridLevel& level,
-                                          const Eigen::SparseMatrix<double>& a,
+Eigen::SparseMatrix<double> boundaryBlock(const GridLevel& level, const SparseSum& a,
                                           const LevelSystem& system) {
   const int nb = system.boundaryCount();
   std::vector<int64_t> start(static_cast<size_t>(nb) + 1, 0);
@@ -119,12 +115,13 @@ Eigen::SparseMatrix<double> boundaryBlock(const GridLevel& level,
   for (int j = 0; j <= nb; ++j)
     bb.outerIndexPtr()[j] = static_cast<int>(start[static_cast<size_t>(j)]);
   tbb::parallel_for(0, nb, [&](int j) {
-    int64_t e = start[static_cast<size_t>(j)];
-    for (SparseIt it(a, unknownOfBoundary(level, system, j)); it; ++it) {
-      const int jb = system.boundaryOfUnknown[static_cast<size_t>(it.row())];
+    int64_t out = start[static_cast<size_t>(j)];
+    const int u = unknownOfBoundary(level, system, j);
+    for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
+      const int jb = system.boundaryOfUnknown[static_cast<size_t>(a.inner()[e])];
       if (jb < 0) continue;
-      bb.innerIndexPtr()[e] = jb;
-      bb.valuePtr()[e++] = it.value();
+      bb.innerIndexPtr()[out] = jb;
+      bb.valuePtr()[out++] = a.value(e);
     }
   });
   return bb;
@@ -132,8 +129,7 @@ Eigen::SparseMatrix<double> boundaryBlock(const GridLevel& level,
 
 /// Fills interiorNextToBoundary and fixupSlots from the columns of `a` at interior unknowns
 /// (A is symmetric, so column u holds row u), each array allocated at its exact size.
-void assignInteriorNextToBoundary(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
-                                  LevelSystem& system) {
+void assignInteriorNextToBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system) {
   SlotCsr& fix = system.interiorNextToBoundary;
   // Few interior unknowns touch the boundary: count their boundary entries on all cores.
   const std::vector<int32_t>& interior = system.interiorUnknowns;
@@ -156,24 +152,24 @@ void assignInteriorNextToBoundary(const GridLevel& level, const Eigen::SparseMat
   row = 0;
   for (size_t k = 0; k < interior.size(); ++k) {
     if (touching[k] == 0) continue;
-    int64_t e = fix.ptr[row++];
-    for (SparseIt it(a, interior[k]); it; ++it) {
-      const int jb = system.boundaryOfUnknown[static_cast<size_t>(it.row())];
+    int64_t out = fix.ptr[row++];
+    const int u = interior[k];
+    for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
+      const int jb = system.boundaryOfUnknown[static_cast<size_t>(a.inner()[e])];
       if (jb < 0) continue;
-      fix.col[static_cast<size_t>(e)] = jb;
-      fix.val[static_cast<size_t>(e++)] = it.value();
+      fix.col[static_cast<size_t>(out)] = jb;
+      fix.val[static_cast<size_t>(out++)] = a.value(e);
     }
   }
 }
 
 }  // namespace
 
-void classifyLevel(const GridLevel& level, const Eigen::SparseMatrix<double>& pattern,
-                   LevelSystem& system) {
+void classifyLevel(const GridLevel& level, const SparseSum& pattern, LevelSystem& system) {
   const int n = level.unknownCount();
-  if (pattern.rows() != n || pattern.cols() != n)
+  if (pattern.rows() != n)
     throw InvalidInputError("multigrid: matrix is " + std::to_string(pattern.rows()) + " x " +
-                            std::to_string(pattern.cols()) + " but the level has " +
+                            std::to_string(pattern.rows()) + " but the level has " +
                             std::to_string(n) + " unknowns");
   std::vector<uint8_t> interior(static_cast<size_t>(n), 0);
   tbb::parallel_for(0, n, [&](int u) {
@@ -206,8 +202,7 @@ void classifyLevel(const GridLevel& level, const Eigen::SparseMatrix<double>& pa
   if (system.boundaryCount() > 0) system.boundarySolver.analyzePattern(bb);
 }
 
-void assignBoundary(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
-                    LevelSystem& system) {
+void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system) {
   // Counted first so every array is allocated once at its exact size, then filled on all cores.
   const int nb = system.boundaryCount();
   SlotCsr& rows = system.boundaryRows;
@@ -226,10 +221,11 @@ void assignBoundary(const GridLevel& level, const Eigen::SparseMatrix<double>& a
     const int u = unknownOfBoundary(level, system, j);
     int64_t off = rows.ptr[sj], on = off + system.offBlockEnd[sj];
     system.offBlockEnd[sj] = on;
-    for (SparseIt it(a, u); it; ++it) {
-      int64_t& e = system.boundaryOfUnknown[static_cast<size_t>(it.row())] < 0 ? off : on;
-      rows.col[static_cast<size_t>(e)] = level.slotOfUnknown[static_cast<size_t>(it.row())];
-      rows.val[static_cast<size_t>(e++)] = it.value();
+    for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
+      const size_t row = static_cast<size_t>(a.inner()[e]);
+      int64_t& out = system.boundaryOfUnknown[row] < 0 ? off : on;
+      rows.col[static_cast<size_t>(out)] = level.slotOfUnknown[row];
+      rows.val[static_cast<size_t>(out++)] = a.value(e);
     }
   });
   assignInteriorNextToBoundary(level, a, system);
@@ -237,8 +233,8 @@ void assignBoundary(const GridLevel& level, const Eigen::SparseMatrix<double>& a
 }
 
 template <typename T>
-void assignStencils(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
-                    const LevelSystem& system, std::vector<T>& stencils) {
+void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSystem& system,
+                    std::vector<T>& stencils) {
   stencils.assign(static_cast<size_t>(system.stencilSize), T(0));
   auto fillRun = [&](const SlotRow& row, int q) {
     const int64_t n = row.runLength(q);
@@ -247,8 +243,8 @@ void assignStencils(const GridLevel& level, const Eigen::SparseMatrix<double>& a
       const int64_t s = row.begin + q + 2 * i;
       if (system.kind[static_cast<size_t>(s)] != SlotKind::Interior) continue;
       const int u = level.unknownOfSlot[static_cast<size_t>(s)];
-      for (SparseIt it(a, u); it; ++it)
-        w[stencilIndex(level, u, static_cast<int>(it.row())) * n + i] = static_cast<T>(it.value());
+      for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e)
+        w[stencilIndex(level, u, a.inner()[e]) * n + i] = static_cast<T>(a.value(e));
       const T centre = w[4 * n + i];
       if (!(centre > T(0)))
         throw NumericalError("multigrid: diagonal entry of unknown " + std::to_string(u) +
@@ -262,9 +258,9 @@ void assignStencils(const GridLevel& level, const Eigen::SparseMatrix<double>& a
     });
 }
 
-template void assignStencils<float>(const GridLevel&, const Eigen::SparseMatrix<double>&,
-                                    const LevelSystem&, std::vector<float>&);
-template void assignStencils<double>(const GridLevel&, const Eigen::SparseMatrix<double>&,
-                                     const LevelSystem&, std::vector<double>&);
+template void assignStencils<float>(const GridLevel&, const SparseSum&, const LevelSystem&,
+                                    std::vector<float>&);
+template void assignStencils<double>(const GridLevel&, const SparseSum&, const LevelSystem&,
+                                     std::vector<double>&);
 
 }  // namespace texgrad::detail

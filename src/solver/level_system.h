@@ -8,6 +8,7 @@
 
 #include "texgrad/solver/cholmod_solver.h"
 #include "texgrad/solver/grid_hierarchy.h"
+#include "texgrad/solver/sparse_sum.h"
 
 namespace texgrad::detail {
 
@@ -82,17 +83,15 @@ struct LevelSystem {
 
 /// Symbolic phase: a texel is interior when its footprint is interior (§6.1) and its row of
 /// `pattern` only touches the 3 x 3 lattice neighbours in its own chart; A_bb^l is analysed.
-void classifyLevel(const GridLevel& level, const Eigen::SparseMatrix<double>& pattern,
-                   LevelSystem& system);
+void classifyLevel(const GridLevel& level, const SparseSum& pattern, LevelSystem& system);
 
 /// Numeric phase for the boundary: fills boundaryRows / offBlockEnd and factorises A_bb^l.
-void assignBoundary(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
-                    LevelSystem& system);
+void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system);
 
 /// Numeric phase for the interior: the stencil planes of every run (see SlotRow) from the rows of
 /// `a` at interior unknowns; the other slots of a run get zero coefficients and mask 0.
 template <typename T>
-void assignStencils(const GridLevel& level, const Eigen::SparseMatrix<double>& a,
-                    const LevelSystem& system, std::vector<T>& stencils);
+void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSystem& system,
+                    std::vector<T>& stencils);
 
 }  // namespace texgrad::detail

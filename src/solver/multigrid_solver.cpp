@@ -138,7 +138,7 @@ struct MultigridSolver<Scalar>::Impl {
   /// `numericPhase` fills stencils and boundary data and factorises. Both at once cost one
   /// chain of Galerkin products instead of two. A^{l+1} is formed before level l's data are
   /// filled in, so the product's temporaries never coexist with them (lower peak memory).
-  void walkLevels(const Eigen::SparseMatrix<double>& a0, bool symbolicPhase, bool numericPhase) {
+  void walkLevels(const SparseSum& a0, bool symbolicPhase, bool numericPhase) {
     if (symbolicPhase) {
       levels.clear();
       levels.resize(static_cast<size_t>(hierarchy.levelCount()));
@@ -146,39 +146,43 @@ struct MultigridSolver<Scalar>::Impl {
       coarseSolver = CholmodSolver();
     }
     Eigen::SparseMatrix<double> coarse;  // A^l for l > 0
-    const Eigen::SparseMatrix<double>* a = &a0;
+    SparseSum a = a0;                    // A^l
     for (int l = 0; l <= coarsest(); ++l) {
       const size_t sl = static_cast<size_t>(l);
       const GridLevel& grid = hierarchy.level(l);
       Level& lv = levels[sl];
       if (symbolicPhase) {
         lv.boxRows = detail::boxRowsOf(grid);
-        nonZeros[sl] = a->nonZeros();
-      } else if (a->nonZeros() != nonZeros[sl] || a->rows() != grid.unknownCount()) {
+        nonZeros[sl] = a.nonZeros();
+      } else if (a.nonZeros() != nonZeros[sl] || a.rows() != grid.unknownCount()) {
         throw InvalidInputError(
             "MultigridSolver::update: level " + std::to_string(l) + " matrix has " +
-            std::to_string(a->nonZeros()) + " non-zeros, the pattern given to init has " +
+            std::to_string(a.nonZeros()) + " non-zeros, the pattern given to init has " +
             std::to_string(nonZeros[sl]) + "; call init again when the sparsity changes");
       }
       if (l > 0 && numericPhase) shiftDiagonal(coarse);
       // Initialised, never assigned: Eigen 3.4's SparseMatrix has no move assignment, so
       // `x = product` would copy it.
       Eigen::SparseMatrix<double> next = l < coarsest()
-                                             ? galerkinProduct(*a, grid, hierarchy.level(l + 1))
+                                             ? galerkinProduct(a, grid, hierarchy.level(l + 1))
                                              : Eigen::SparseMatrix<double>();
       if (l < coarsest() || l == 0) {
-        if (symbolicPhase) detail::classifyLevel(grid, *a, lv.sys);
+        if (symbolicPhase) detail::classifyLevel(grid, a, lv.sys);
         if (numericPhase) {
-          detail::assignBoundary(grid, *a, lv.sys);
-          detail::assignStencils<T>(grid, *a, lv.sys, lv.stencil);
+          detail::assignBoundary(grid, a, lv.sys);
+          detail::assignStencils<T>(grid, a, lv.sys, lv.stencil);
         }
       }
       if (l == coarsest()) {
-        if (symbolicPhase) coarseSolver.analyzePattern(*a);
-        if (numericPhase) coarseSolver.factorize(*a);
+        // A one-level hierarchy is solved directly: only then is A^0 formed.
+        const Eigen::SparseMatrix<double> formed =
+            l == 0 ? a0.toMatrix() : Eigen::SparseMatrix<double>();
+        const Eigen::SparseMatrix<double>& direct = l == 0 ? formed : coarse;
+        if (symbolicPhase) coarseSolver.analyzePattern(direct);
+        if (numericPhase) coarseSolver.factorize(direct);
       } else {
         coarse.swap(next);  // next now holds A^l, freed at the end of this iteration
-        a = &coarse;
+        a = SparseSum(coarse);
       }
     }
   }
@@ -189,7 +193,7 @@ struct MultigridSolver<Scalar>::Impl {
     stats.initSeconds += secondsSince(start);
   }
 
-  void symbolic(const Eigen::SparseMatrix<double>& pattern, bool numericToo) {
+  void symbolic(const SparseSum& pattern, bool numericToo) {
     const auto start = Clock::now();
     walkLevels(pattern, true, numericToo);
     initialised = true;
@@ -205,7 +209,7 @@ struct MultigridSolver<Scalar>::Impl {
     refreshCounters();
   }
 
-  void numeric(const Eigen::SparseMatrix<double>& a0) {
+  void numeric(const SparseSum& a0) {
     if (!initialised) throw InvalidInputError("MultigridSolver::update called before init");
     const auto start = Clock::now();
     walkLevels(a0, false, true);
@@ -387,8 +391,7 @@ template <typename Scalar>
 MultigridSolver<Scalar>& MultigridSolver<Scalar>::operator=(MultigridSolver&&) noexcept = default;
 
 template <typename Scalar>
-void MultigridSolver<Scalar>::init(const TexelGrid& grid,
-                                   const Eigen::SparseMatrix<double>& pattern) {
+void MultigridSolver<Scalar>::init(const TexelGrid& grid, const SparseSum& pattern) {
   impl_->arena.execute([&] {
     impl_->buildHierarchy(grid);
     impl_->symbolic(pattern, false);
@@ -396,8 +399,7 @@ void MultigridSolver<Scalar>::init(const TexelGrid& grid,
 }
 
 template <typename Scalar>
-void MultigridSolver<Scalar>::initAndUpdate(const TexelGrid& grid,
-                                            const Eigen::SparseMatrix<double>& a) {
+void MultigridSolver<Scalar>::initAndUpdate(const TexelGrid& grid, const SparseSum& a) {
   impl_->arena.execute([&] {
     impl_->buildHierarchy(grid);
     impl_->symbolic(a, true);
@@ -405,7 +407,7 @@ void MultigridSolver<Scalar>::initAndUpdate(const TexelGrid& grid,
 }
 
 template <typename Scalar>
-void MultigridSolver<Scalar>::update(const Eigen::SparseMatrix<double>& a) {
+void MultigridSolver<Scalar>::update(const SparseSum& a) {
   impl_->arena.execute([&] { impl_->numeric(a); });
 }
 

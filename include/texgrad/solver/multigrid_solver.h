@@ -11,6 +11,7 @@
 #include "texgrad/atlas/texel_grid.h"
 #include "texgrad/solver/grid_hierarchy.h"
 #include "texgrad/solver/solve_report.h"
+#include "texgrad/solver/sparse_sum.h"
 
 namespace texgrad {
 
@@ -66,14 +67,15 @@ class MultigridSolver {
 
   /// Symbolic phase: builds the hierarchy, the coarse sparsity patterns, the interior/boundary
   /// split and the CHOLMOD analyses. `pattern` has the sparsity of every later A (values unused).
-  void init(const TexelGrid& grid, const Eigen::SparseMatrix<double>& pattern);
+  void init(const TexelGrid& grid, const SparseSum& pattern);
   /// Numeric phase: Galerkin products A^{l+1} = Pᵀ A^l P, stencils, boundary and coarse
-  /// factorisations. `a` must have the pattern given to init. Throws NumericalError if a block is
-  /// not positive definite.
-  void update(const Eigen::SparseMatrix<double>& a);
+  /// factorisations. `a` (a matrix, or a SparseSum such as alpha M + S, which is then never
+  /// formed) must have the pattern given to init and is not referenced afterwards. Throws
+  /// NumericalError if a block is not positive definite.
+  void update(const SparseSum& a);
   /// init(grid, a) then update(a) with one chain of Galerkin products instead of two (for
   /// one-shot solves; the result is identical).
-  void initAndUpdate(const TexelGrid& grid, const Eigen::SparseMatrix<double>& a);
+  void initAndUpdate(const TexelGrid& grid, const SparseSum& a);
   /// One V-cycle (Fig. 8) improving x in place for right-hand side b (both n x k).
   void cycle(const Matrix& b, Matrix& x);
   /// V-cycles from the initial guess x until control is met; residual and change per cycle.
