@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # One command on a fresh Debian 12 box (as root): install, build with warnings as errors, and run
-# every test once: the fast ones under AddressSanitizer+UBSan, then in Release the ones too slow
-# for the sanitizer build (named *Slow*: full-size shared meshes), the malloc tests the sanitizers
-# exclude, and the viewer page's tests, including its end-to-end tests in headless Chromium (CTest
-# ViewerE2E). `ctest --test-dir build/release` afterwards runs the whole suite in Release.
+# the fast tests under AddressSanitizer+UBSan, then in Release the solver's fast tests again (its
+# SIMD kernels exist only there), the tests too slow for the sanitizer build (named *Slow*:
+# full-size shared meshes), the malloc tests the sanitizers exclude, and the viewer page's tests,
+# including its end-to-end tests in headless Chromium (CTest ViewerE2E).
+# `ctest --test-dir build/release` afterwards runs the whole suite in Release.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh --viewer
@@ -22,7 +23,10 @@ ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 echo "== release build"
 bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_VIEWER=ON \
   -DTEXGRAD_E2E_TESTS=ON
-# The fast tests already passed under the sanitizers above (the stricter check); running them
-# again here would add about two minutes to CI. HeapReuse's glibc-malloc tests are compiled only
-# without the sanitizers (which replace malloc), so they run here.
+# The solver's row kernels are compiled for AVX2 and AVX-512 only without the sanitizers
+# (src/solver/grid_kernels.h), so the solver's fast tests run again here on the kernels users get.
+ctest --test-dir build/release -j"$jobs" --output-on-failure -L '^solver$'
+# The other fast tests already passed under the sanitizers above (the stricter check); running
+# them again here would add about two minutes to CI. HeapReuse's glibc-malloc tests are compiled
+# only without the sanitizers (which replace malloc), so they run here.
 ctest --test-dir build/release -j"$jobs" --output-on-failure -R 'Slow|HeapReuse|ViewerPageUnits|ViewerE2E'

@@ -267,7 +267,14 @@ void SystemSolver::init(const Eigen::SparseMatrix<double>& pattern) {
     impl_->direct.analyzePattern(pattern);
   else
     impl_->visitMultigrid([&](auto& solver) {
-      solver.init(impl_->grid, pattern);
+      // The multigrid set-up reads compressed matrices only (SparseSum); update() compresses too.
+      if (pattern.isCompressed()) {
+        solver.init(impl_->grid, pattern);
+      } else {
+        Eigen::SparseMatrix<double> compressed = pattern;
+        compressed.makeCompressed();
+        solver.init(impl_->grid, compressed);
+      }
       return 0;
     });
   impl_->initTime = secondsSince(start);

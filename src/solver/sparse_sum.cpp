@@ -19,13 +19,15 @@ SparseSum::SparseSum(bool compressed, Eigen::Index rows, Eigen::Index cols, cons
 }
 
 void SparseSum::addSecond(double xScale, double yScale, bool compressed, Eigen::Index rows,
-                          const int* outer, const int* inner, const double* values) {
+                          Eigen::Index cols, const int* outer, const int* inner,
+                          const double* values) {
   if (!compressed)
     throw InvalidInputError(
         "SparseSum: the second matrix is not compressed; call makeCompressed()");
-  if (rows != rows_)
-    throw InvalidInputError("SparseSum: the matrices have " + std::to_string(rows_) + " and " +
-                            std::to_string(rows) + " rows; expected one size");
+  if (rows != rows_ || cols != rows_)
+    throw InvalidInputError("SparseSum: the matrices are " + std::to_string(rows_) + " x " +
+                            std::to_string(rows_) + " and " + std::to_string(rows) + " x " +
+                            std::to_string(cols) + "; expected one square size");
   const bool samePattern = (outer == outer_ || std::equal(outer_, outer_ + rows_ + 1, outer)) &&
                            (inner == inner_ || std::equal(inner_, inner_ + outer_[rows_], inner));
   if (!samePattern)

@@ -47,6 +47,9 @@ TEST(SparseSum, RejectsOperandsItCannotReadTogether) {
   const test::SyntheticProblem p = test::squareProblem(6);
   const test::SyntheticProblem q = test::squareProblem(7);
   EXPECT_THROW(SparseSum(1.0, p.mass, 1.0, q.stiffness), InvalidInputError);  // sizes differ
+  // Same row count, fewer columns: its column starts must not be read past their end.
+  const Eigen::SparseMatrix<double> narrow = p.stiffness.leftCols(p.stiffness.cols() - 1);
+  EXPECT_THROW(SparseSum(1.0, p.mass, 1.0, narrow), InvalidInputError);
   Eigen::SparseMatrix<double> extra = p.stiffness;
   extra.coeffRef(0, extra.rows() - 1) = 1.0;  // an entry M does not have
   extra.makeCompressed();

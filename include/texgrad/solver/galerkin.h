@@ -11,14 +11,14 @@ namespace texgrad {
 /// Pᵀ A P for A (n x n; a matrix or a SparseSum) and P (n x m), column by column without forming A
 /// P. The pattern is structural (no entry is dropped for being zero), so it depends only on the
 /// patterns of A and P; the result does not depend on the thread count. Throws
-/// InvalidInputError unless A is square with P's row count.
+/// InvalidInputError unless A is square with P's row count (and, as a matrix, compressed).
 Eigen::SparseMatrix<double> galerkinProduct(const SparseSum& a,
                                             const Eigen::SparseMatrix<double>& p);
 
 /// Pᵀ A P for the bilinear prolongation P from `coarse` to `fine` (consecutive levels of one
 /// GridHierarchy), computed from the lattice positions without storing P; equal, bit for bit, to
 /// galerkinProduct(a, GridHierarchy::prolongation(l)). Throws InvalidInputError unless A is
-/// square with fine's unknown count.
+/// square with fine's unknown count (and, as a matrix, compressed).
 Eigen::SparseMatrix<double> galerkinProduct(const SparseSum& a, const GridLevel& fine,
                                             const GridLevel& coarse);
 

@@ -67,6 +67,7 @@ class MultigridSolver {
 
   /// Symbolic phase: builds the hierarchy, the coarse sparsity patterns, the interior/boundary
   /// split and the CHOLMOD analyses. `pattern` has the sparsity of every later A (values unused).
+  /// Matrices reach init, update and initAndUpdate as SparseSum: they must be compressed.
   void init(const TexelGrid& grid, const SparseSum& pattern);
   /// Numeric phase: Galerkin products A^{l+1} = Pᵀ A^l P, stencils, boundary and coarse
   /// factorisations. `a` (a matrix, or a SparseSum such as alpha M + S, which is then never

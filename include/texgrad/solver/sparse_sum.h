@@ -22,8 +22,9 @@ class SparseSum {
   SparseSum(double xScale, const X& x, double yScale, const Y& y)
       : SparseSum(x.isCompressed(), x.rows(), x.cols(), x.outerIndexPtr(), x.innerIndexPtr(),
                   x.valuePtr()) {
-    addSecond(xScale, yScale, y.isCompressed(), y.rows(), y.outerIndexPtr(), y.innerIndexPtr(),
-              y.valuePtr());
+    static_assert(!X::IsRowMajor && !Y::IsRowMajor, "SparseSum reads column-major matrices");
+    addSecond(xScale, yScale, y.isCompressed(), y.rows(), y.cols(), y.outerIndexPtr(),
+              y.innerIndexPtr(), y.valuePtr());
   }
 
   /// Rows (= columns).
@@ -42,8 +43,8 @@ class SparseSum {
  private:
   SparseSum(bool compressed, Eigen::Index rows, Eigen::Index cols, const int* outer,
             const int* inner, const double* values);
-  void addSecond(double xScale, double yScale, bool compressed, Eigen::Index rows, const int* outer,
-                 const int* inner, const double* values);
+  void addSecond(double xScale, double yScale, bool compressed, Eigen::Index rows,
+                 Eigen::Index cols, const int* outer, const int* inner, const double* values);
 
   Eigen::Index rows_ = 0;
   const int* outer_ = nullptr;
