@@ -4,7 +4,8 @@
 # SIMD kernels exist only there), the tests too slow for the sanitizer build (named *Slow*:
 # full-size shared meshes), the malloc tests the sanitizers exclude, and the viewer page's tests,
 # including its end-to-end tests in headless Chromium (CTest ViewerE2E).
-# `ctest --test-dir build/release` afterwards runs the whole suite in Release.
+# `ctest --test-dir build/release` afterwards runs the whole suite in Release. --no-label-summary
+# keeps ctest's "tests passed" summary the last thing printed (tests carry module labels).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh --viewer
@@ -18,15 +19,16 @@ echo "== sanitizer build (ASan + UBSan)"
 bash scripts/build.sh build/asan -DCMAKE_BUILD_TYPE=None -DCMAKE_CXX_FLAGS="-O1 -g1" \
   -DTEXGRAD_SANITIZE=ON -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_BENCHMARKS=OFF
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-  ctest --test-dir build/asan -j"$jobs" --output-on-failure -E 'Slow'
+  ctest --test-dir build/asan -j"$jobs" --output-on-failure --no-label-summary -E 'Slow'
 
 echo "== release build"
 bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_VIEWER=ON \
   -DTEXGRAD_E2E_TESTS=ON
 # The solver's row kernels are compiled for AVX2 and AVX-512 only without the sanitizers
 # (src/solver/grid_kernels.h), so the solver's fast tests run again here on the kernels users get.
-ctest --test-dir build/release -j"$jobs" --output-on-failure -L '^solver$'
+ctest --test-dir build/release -j"$jobs" --output-on-failure --no-label-summary -L '^solver$'
 # The other fast tests already passed under the sanitizers above (the stricter check); running
 # them again here would add about two minutes to CI. HeapReuse's glibc-malloc tests are compiled
 # only without the sanitizers (which replace malloc), so they run here.
-ctest --test-dir build/release -j"$jobs" --output-on-failure -R 'Slow|HeapReuse|ViewerPageUnits|ViewerE2E'
+ctest --test-dir build/release -j"$jobs" --output-on-failure --no-label-summary \
+  -R 'Slow|HeapReuse|ViewerPageUnits|ViewerE2E'
