@@ -4,7 +4,9 @@
 // after each of the first cycles on the paper's Fig. 11 problem (alpha = 1e4, random RGB psi,
 // x = 0). scripts/bench-solver.sh runs one process per row so that peak memory is per row.
 //
-// Usage: solver_table MESH RESOLUTION [--name NAME] [--no-direct] | solver_table --header
+// Usage: solver_table MESH RESOLUTION [--name NAME] [--no-direct] [--line-ratio R]
+//        [--weak-row-reach D] | solver_table --header
+// (--line-ratio 0 --weak-row-reach 0: the paper's smoother and split, as a baseline.)
 #include <sys/resource.h>
 
 #include <chrono>
@@ -45,8 +47,8 @@ struct MultigridTimes {
 };
 
 /// Seconds of initAndUpdate (one chain of Galerkin products, as the apps set up a solve).
-double timeInitAndUpdate(const TexelGrid& grid, const SparseSum& a, int threads) {
-  MultigridOptions options;
+double timeInitAndUpdate(const TexelGrid& grid, const SparseSum& a, MultigridOptions options,
+                         int threads) {
   options.threads = threads;
   MultigridSolver<float> solver(options);
   const auto start = Clock::now();
@@ -57,8 +59,7 @@ double timeInitAndUpdate(const TexelGrid& grid, const SparseSum& a, int threads)
 /// Times init, update and the mean of `cycles` V-cycles on the RGB right-hand side b.
 template <typename Scalar>
 MultigridTimes timeMultigrid(const TexelGrid& grid, const SparseSum& a, const Eigen::MatrixXd& b,
-                             int threads, int cycles) {
-  MultigridOptions options;
+                             MultigridOptions options, int threads, int cycles) {
   options.threads = threads;
   MultigridSolver<Scalar> solver(options);
   MultigridTimes t;
@@ -81,8 +82,9 @@ MultigridTimes timeMultigrid(const TexelGrid& grid, const SparseSum& a, const Ei
 /// Relative RMS error to `truth` after each of the first kErrorCycles V-cycles from x = 0.
 template <typename Scalar>
 std::vector<double> errorPerCycle(const TexelGrid& grid, const SparseSum& a,
-                                  const Eigen::MatrixXd& b, const Eigen::MatrixXd& truth) {
-  MultigridSolver<Scalar> solver;
+                                  const Eigen::MatrixXd& b, const Eigen::MatrixXd& truth,
+                                  const MultigridOptions& options) {
+  MultigridSolver<Scalar> solver(options);
   solver.init(grid, a);
   solver.update(a);
   using Matrix = typename MultigridSolver<Scalar>::Matrix;
@@ -120,18 +122,24 @@ int run(int argc, char** argv) {
     return 0;
   }
   if (argc < 3) {
-    std::cerr << "usage: solver_table MESH RESOLUTION [--name NAME] [--no-direct] | "
-                 "solver_table --header\n";
+    std::cerr << "usage: solver_table MESH RESOLUTION [--name NAME] [--no-direct] "
+                 "[--line-ratio R] [--weak-row-reach D] | solver_table --header\n";
     return 2;
   }
   const std::string path = argv[1];
   const int res = std::stoi(argv[2]);
   std::string name = std::filesystem::path(path).stem().string();
   bool direct = true;
+  MultigridOptions options;
   for (int k = 3; k < argc; ++k) {
     if (std::strcmp(argv[k], "--no-direct") == 0) direct = false;
     if (std::strcmp(argv[k], "--name") == 0 && k + 1 < argc) name = argv[++k];
+    if (std::strcmp(argv[k], "--line-ratio") == 0 && k + 1 < argc)
+      options.lineRatio = std::stod(argv[++k]);
+    if (std::strcmp(argv[k], "--weak-row-reach") == 0 && k + 1 < argc)
+      options.weakRowReach = std::stoi(argv[++k]);
   }
+  options.validate();
 
   auto start = Clock::now();
   TexturedMesh mesh = readMesh(path);
@@ -152,17 +160,17 @@ int run(int argc, char** argv) {
   const Eigen::MatrixXd b = randomMassRhs(domain, 3);
 
   const int cycles = 5;
-  const double fused = timeInitAndUpdate(grid, a, 2);  // first: pays the process's page faults
+  const double fused = timeInitAndUpdate(grid, a, options, 2);  // first: pays the process's page faults
   // Peak of a process that reads, builds operators and sets up one solver, as the CLI does (the
   // timing runs below reuse the heap but fragment it).
   const double peakMultigrid = peakGigabytes();
-  const MultigridTimes f2 = timeMultigrid<float>(grid, a, b, 2, cycles);
-  const MultigridTimes f1 = timeMultigrid<float>(grid, a, b, 1, cycles);
-  const MultigridTimes d2 = timeMultigrid<double>(grid, a, b, 2, cycles);
-  const MultigridTimes d1 = timeMultigrid<double>(grid, a, b, 1, cycles);
+  const MultigridTimes f2 = timeMultigrid<float>(grid, a, b, options, 2, cycles);
+  const MultigridTimes f1 = timeMultigrid<float>(grid, a, b, options, 1, cycles);
+  const MultigridTimes d2 = timeMultigrid<double>(grid, a, b, options, 2, cycles);
+  const MultigridTimes d1 = timeMultigrid<double>(grid, a, b, options, 1, cycles);
   int levels = 0;
   {
-    MultigridSolver<float> probe;
+    MultigridSolver<float> probe(options);
     probe.init(grid, a);
     levels = probe.hierarchy().levelCount();
   }
@@ -182,7 +190,7 @@ int run(int argc, char** argv) {
     std::snprintf(buffer, sizeof buffer, "%.2f", peakGigabytes());
     peakDirect = buffer;
     errors.clear();
-    for (double e : errorPerCycle<float>(grid, a, b, truth)) {
+    for (double e : errorPerCycle<float>(grid, a, b, truth, options)) {
       std::snprintf(buffer, sizeof buffer, "%s%.1e", errors.empty() ? "" : " ", e);
       errors += buffer;
     }

@@ -184,6 +184,8 @@ SolverSettings SolverArgs::settings() const {
   s.tolerance = tolerance;
   s.multigrid.levels = levels;
   s.multigrid.sweeps = sweeps;
+  s.multigrid.lineRatio = lineRatio;
+  s.multigrid.weakRowReach = weakRowReach;
   s.multigrid.threads = threads;
   s.validate();
   return s;
@@ -212,6 +214,16 @@ void addSolverOptions(CLI::App* cmd, SolverArgs& args, const SolverSettings& def
   cmd->add_option("--sweeps", args.sweeps, "Gauss-Seidel sweeps per level (paper default 3)")
       ->default_val(3)
       ->check(CLI::Range(1, 100));
+  cmd->add_option("--line-ratio", args.lineRatio,
+                  "Also relax texels by lines along a grid axis when their stencil couples more "
+                  "than this many times as strongly along it as across (stretched charts); 0 = off")
+      ->default_val(MultigridOptions{}.lineRatio)
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--weak-row-reach", args.weakRowReach,
+                  "Solve texels within this many texels of a barely covered boundary texel "
+                  "directly with the boundary; 0 = off (the paper's split)")
+      ->default_val(MultigridOptions{}.weakRowReach)
+      ->check(CLI::Range(0, 8));
   cmd->add_option("--precision", args.precision,
                   "float or double V-cycles (factorisations are always double)")
       ->default_val("float")

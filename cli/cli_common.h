@@ -58,6 +58,8 @@ struct SolverArgs {
   double tolerance = 0.0;
   int levels = 4;
   int sweeps = 3;
+  double lineRatio = MultigridOptions{}.lineRatio;
+  int weakRowReach = MultigridOptions{}.weakRowReach;
   int threads = 0;
   /// The settings these flags describe; throws InvalidInputError on a bad value.
   SolverSettings settings() const;

@@ -81,6 +81,10 @@ void GeodesicOptions::validate() const {
 GeodesicOptions GeodesicOptions::interactive() {
   GeodesicOptions options;
   options.solver.multigrid.sweeps = kInteractiveSweeps;
+  // The paper's cycle: one update a frame matters more than the factor per cycle here. Lines and
+  // the weak-row split made an update on spot at 1024² take 40-43 ms against 29-34 ms.
+  options.solver.multigrid.lineRatio = 0.0;
+  options.solver.multigrid.weakRowReach = 0;
   return options;
 }
 

@@ -24,10 +24,65 @@ int stencilIndex(const GridLevel& level, int u, int v) {
   return (dy + 1) * 3 + (dx + 1);
 }
 
+}  // namespace
+
+std::array<double, 9> stencilRow(const GridLevel& level, const SparseSum& a, int u) {
+  std::array<double, 9> w{};
+  for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
+    const int index = stencilIndex(level, u, a.inner()[e]);
+    if (index >= 0) w[static_cast<size_t>(index)] = a.value(e);
+  }
+  return w;
+}
+
 bool rowIsStencil(const GridLevel& level, const SparseSum& pattern, int u) {
   for (int e = pattern.outer()[u]; e != pattern.outer()[u + 1]; ++e)
     if (stencilIndex(level, u, pattern.inner()[e]) < 0) return false;
   return true;
+}
+
+namespace {
+
+/// Rows with a_uu < kWeakDiagonal sum_{v != u} |a_uv| count as weak (see lockNearWeakRows).
+constexpr double kWeakDiagonal = 0.25;
+
+/// True if row u of `a` is weak: its diagonal is small against its off-diagonal entries. Texels
+/// that their chart barely covers have such rows (mixed-sign couplings from sliver pieces).
+bool isWeakRow(const SparseSum& a, int u) {
+  double diagonal = 0.0, off = 0.0;
+  for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
+    if (a.inner()[e] == u)
+      diagonal += a.value(e);
+    else
+      off += std::abs(a.value(e));
+  }
+  return diagonal < kWeakDiagonal * off;
+}
+
+/// Clears `interior` for every unknown within `reach` lattice steps (Chebyshev) of a
+/// non-interior unknown with a weak row, in the same chart. Eliminating a weak row couples its
+/// neighbours far more strongly than their own stencils say, so Gauss–Seidel on them barely
+/// converges (the slow modes on spot and lpshead); solving them with the boundary does.
+void lockNearWeakRows(const GridLevel& level, const SparseSum& a, int reach,
+                      std::vector<uint8_t>& interior) {
+  const int n = level.unknownCount();
+  std::vector<uint8_t> weak(static_cast<size_t>(n), 0);
+  tbb::parallel_for(0, n, [&](int u) {
+    weak[static_cast<size_t>(u)] = !interior[static_cast<size_t>(u)] && isWeakRow(a, u);
+  });
+  for (int u = 0; u < n; ++u) {
+    if (!weak[static_cast<size_t>(u)]) continue;
+    const size_t su = static_cast<size_t>(u);
+    const GridBox& box =
+        level.boxes[static_cast<size_t>(level.boxOfChart[static_cast<size_t>(level.chartOfUnknown[su])])];
+    for (int dy = -reach; dy <= reach; ++dy)
+      for (int dx = -reach; dx <= reach; ++dx) {
+        const int x = level.xOfUnknown[su] + dx, y = level.yOfUnknown[su] + dy;
+        if (!box.contains(x, y)) continue;
+        const int v = level.unknownOfSlot[static_cast<size_t>(box.slot(x, y))];
+        if (v >= 0) interior[static_cast<size_t>(v)] = 0;
+      }
+  }
 }
 
 /// Interior run of box row r (an empty run if the row has no interior slot).
@@ -165,7 +220,8 @@ void assignInteriorNextToBoundary(const GridLevel& level, const SparseSum& a, Le
 
 }  // namespace
 
-void classifyLevel(const GridLevel& level, const SparseSum& pattern, LevelSystem& system) {
+void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRowReach,
+                   LevelSystem& system) {
   const int n = level.unknownCount();
   if (pattern.rows() != n)
     throw InvalidInputError("multigrid: matrix is " + std::to_string(pattern.rows()) + " x " +
@@ -176,6 +232,7 @@ void classifyLevel(const GridLevel& level, const SparseSum& pattern, LevelSystem
     const size_t su = static_cast<size_t>(u);
     interior[su] = level.footprintInterior[su] && rowIsStencil(level, pattern, u);
   });
+  if (weakRowReach > 0) lockNearWeakRows(level, pattern, weakRowReach, interior);
   system.kind.assign(static_cast<size_t>(level.slotCount), SlotKind::Empty);
   system.boundaryOfUnknown.assign(static_cast<size_t>(n), -1);
   const auto interiorCount = static_cast<size_t>(std::count(interior.begin(), interior.end(), 1));

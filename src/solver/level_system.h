@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/SparseCore>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -81,9 +82,20 @@ struct LevelSystem {
   int boundaryCount() const { return static_cast<int>(boundarySlots.size()); }
 };
 
-/// Symbolic phase: a texel is interior when its footprint is interior (§6.1) and its row of
-/// `pattern` only touches the 3 x 3 lattice neighbours in its own chart; A_bb^l is analysed.
-void classifyLevel(const GridLevel& level, const SparseSum& pattern, LevelSystem& system);
+/// The 3 x 3 stencil of row u of `a` (index (dy + 1) * 3 + (dx + 1)); entries outside the
+/// lattice neighbourhood of u in its chart are left out.
+std::array<double, 9> stencilRow(const GridLevel& level, const SparseSum& a, int u);
+
+/// True if row u of `pattern` only has entries at the 3 x 3 lattice neighbours of u in its chart.
+bool rowIsStencil(const GridLevel& level, const SparseSum& pattern, int u);
+
+/// Symbolic phase: a texel is interior when its footprint is interior (§6.1), its row of
+/// `pattern` only touches the 3 x 3 lattice neighbours in its own chart, and (reach > 0) it lies
+/// more than weakRowReach lattice steps from a boundary texel whose row of `pattern` is weak
+/// (diagonal < 1/4 of the off-diagonal magnitudes); A_bb^l is analysed. Only that last test
+/// reads the values of `pattern`; any values give a correct solver.
+void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRowReach,
+                   LevelSystem& system);
 
 /// Numeric phase for the boundary: fills boundaryRows / offBlockEnd and factorises A_bb^l.
 void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system);

@@ -79,7 +79,8 @@ TEST_P(Fig11Slow, MultigridConvergesGeometricallyToTheDirectSolution) {
       break;
     }
   std::cout << reached << "\n";
-  EXPECT_LT(factor, 1.0);
+  // The target for the worst mesh (the median target, 0.3, is a property of the set).
+  EXPECT_LE(factor, 0.6);
   EXPECT_LE(*std::min_element(d.begin(), d.end()), 1e-10) << "double cycles stall at "
                                                           << d.back();
   // Geometric decay: every block of 5 cycles (until 1e-9) cuts the error by a constant factor.

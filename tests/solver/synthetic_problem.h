@@ -68,9 +68,13 @@ inline TexelGrid makeGrid(int nx, int ny, const std::function<CellInfo(int, int)
   return g;
 }
 
+/// Diffusion tensor diag(dx, dy) of cell (a, b).
+using CellDiffusion = std::function<std::array<double, 2>(int, int)>;
+
 /// Assembles bilinear-FEM mass and stiffness over covered cells (Partial cells weighted 1/2), with
-/// diffusion tensor diag(dx, dy) in the stiffness; mass scaled so the covered area is 1.
-inline SyntheticProblem assemble(TexelGrid grid, double dx = 1.0, double dy = 1.0) {
+/// diffusion tensor diffusion(a, b) in the stiffness of cell (a, b); mass scaled so the covered
+/// area is 1.
+inline SyntheticProblem assemble(TexelGrid grid, const CellDiffusion& diffusion) {
   const double mref[4][4] = {{4, 2, 2, 1}, {2, 4, 1, 2}, {2, 1, 4, 2}, {1, 2, 2, 4}};
   const int cx[4] = {0, 1, 0, 1}, cy[4] = {0, 0, 1, 1};
   double area = 0.0;
@@ -85,6 +89,7 @@ inline SyntheticProblem assemble(TexelGrid grid, double dx = 1.0, double dy = 1.
       const CellCoverage c = grid.cellCoverage[static_cast<size_t>(grid.cellIndex(a, b))];
       if (c == CellCoverage::Empty) continue;
       const double w = c == CellCoverage::Full ? 1.0 : 0.5;
+      const auto [dx, dy] = diffusion(a, b);
       int u[4];
       for (int i = 0; i < 4; ++i)
         u[i] = grid.unknownOfTexel[static_cast<size_t>(grid.texelIndex(a + cx[i], b + cy[i]))];
@@ -104,6 +109,11 @@ inline SyntheticProblem assemble(TexelGrid grid, double dx = 1.0, double dy = 1.
   p.mass.setFromTriplets(mt.begin(), mt.end());
   p.stiffness.setFromTriplets(st.begin(), st.end());
   return p;
+}
+
+/// assemble() with the same diffusion tensor diag(dx, dy) in every cell.
+inline SyntheticProblem assemble(TexelGrid grid, double dx = 1.0, double dy = 1.0) {
+  return assemble(std::move(grid), [dx, dy](int, int) { return std::array<double, 2>{dx, dy}; });
 }
 
 /// Couples texel pairs like a seam does (S += w (e_s - e_t)(e_s - e_t)ᵀ), giving boundary rows
@@ -130,6 +140,21 @@ inline SyntheticProblem squareProblem(int n, double dx = 1.0, double dy = 1.0) {
     if (a == 0 || b == 0 || a == n + 1 || b == n + 1) return {CellCoverage::Partial, 0};
     return {CellCoverage::Full, 0};
   }), dx, dy);
+}
+
+/// squareProblem(n) whose cells in the middle third of the rows diffuse `stretch` times more
+/// strongly along x than along y (dx = 1, dy = 1 / stretch), or along y with alongY: the part
+/// of a chart that its parameterisation stretches.
+inline SyntheticProblem stretchedBandProblem(int n, double stretch, bool alongY = false) {
+  return assemble(makeGrid(n + 3, n + 3, [n](int a, int b) -> CellInfo {
+    if (a < 0 || b < 0 || a > n + 1 || b > n + 1) return {};
+    if (a == 0 || b == 0 || a == n + 1 || b == n + 1) return {CellCoverage::Partial, 0};
+    return {CellCoverage::Full, 0};
+  }), [n, stretch, alongY](int a, int b) {
+    const int across = alongY ? a : b;
+    if (3 * across < n || 3 * across >= 2 * n) return std::array<double, 2>{1.0, 1.0};
+    return alongY ? std::array<double, 2>{1.0 / stretch, 1.0} : std::array<double, 2>{1.0, 1.0 / stretch};
+  });
 }
 
 /// Three charts (disc, rectangle, L-shape) in a (8s x 6s) grid with seams between their

@@ -83,12 +83,13 @@ TEST(Multigrid, FloatReachesSinglePrecisionAccuracy) {
 
 TEST(Multigrid, InitAndUpdateEqualsInitThenUpdate) {
   // One chain of Galerkin products for both phases gives bit-identical cycles, and an update
-  // with a new alpha afterwards still needs no new symbolic analysis.
+  // with a new alpha afterwards still needs no new symbolic analysis. (The values given to init
+  // guide the interior/boundary split, so both start from the same matrix.)
   const test::SyntheticProblem p = test::multiChartProblem(12);
   const Eigen::SparseMatrix<double> a = p.system(1e3);
   const Eigen::MatrixXd b = test::randomBlock(a.rows(), 2, 5);
   MultigridSolver<double> separate, fused;
-  separate.init(p.grid, p.system(1.0));
+  separate.init(p.grid, a);
   separate.update(a);
   fused.initAndUpdate(p.grid, a);
   EXPECT_EQ(fused.stats().inits, 1);
@@ -299,4 +300,94 @@ TEST(Multigrid, CoarsestOnlyProblemIsSolvedDirectly) {
   mg.solve(b, x, {0, 0.0});
   EXPECT_LT(mg.refine(b, x), 1e-12);
   EXPECT_LT((b - a * x).norm(), 1e-12 * b.norm());
+}
+
+TEST(Multigrid, LinesRelaxTexelsCoupledMostlyAlongOneAxis) {
+  // A band of cells diffusing 100 times more strongly along one axis (part of a chart that its
+  // parameterisation stretches): point Gauss–Seidel barely smooths errors that vary across
+  // that axis, and a line cut off from the boundary texels it ends on leaves the error that is
+  // smooth along the whole row. Both axes, since x and y lines are separate code paths.
+  for (const bool alongY : {false, true}) {
+    const test::SyntheticProblem p = test::stretchedBandProblem(96, 100.0, alongY);
+    MultigridOptions pointOnly;
+    pointOnly.lineRatio = 0.0;
+    const SolveReport lines = runCycles<double>(p, 1e-2, 10, 2);
+    const SolveReport points = runCycles<double>(p, 1e-2, 10, 2, pointOnly);
+    std::printf("stretched along %s: factor %.3f with lines, %.3f without\n", alongY ? "y" : "x",
+                lines.convergenceFactor(4), points.convergenceFactor(4));
+    EXPECT_LT(lines.convergenceFactor(4), 0.3) << lines.toString();
+    EXPECT_GT(points.convergenceFactor(4), 0.6) << points.toString();
+  }
+}
+
+TEST(Multigrid, LineRelaxationKeepsTheCycleSymmetric) {
+  // CG needs a symmetric preconditioner: <V(r), s> = <r, V(s)> with lines in both directions.
+  const test::SyntheticProblem p = test::squareProblem(40, 1.0, 1e-2);
+  const test::SyntheticProblem q = test::squareProblem(40, 1e-2, 1.0);
+  for (const test::SyntheticProblem* problem : {&p, &q}) {
+    const Eigen::SparseMatrix<double> a = problem->system(1e-2);
+    MultigridSolver<double> mg;
+    mg.initAndUpdate(problem->grid, a);
+    ASSERT_GT(mg.levelInfo().front().lineTexels, 0);
+    const Eigen::MatrixXd r = test::randomBlock(a.rows(), 1, 3), s = test::randomBlock(a.rows(), 1, 4);
+    Eigen::MatrixXd vr, vs;
+    mg.precondition(r, vr);
+    mg.precondition(s, vs);
+    const double left = vr.col(0).dot(s.col(0)), right = r.col(0).dot(vs.col(0));
+    EXPECT_NEAR(left, right, 1e-10 * std::abs(left));
+  }
+}
+
+TEST(Multigrid, TexelsNearAWeakBoundaryRowAreSolvedWithTheBoundary) {
+  // A boundary texel with a tiny diagonal and large mixed-sign couplings (what a texel barely
+  // covered by sliver triangles gets): c g gᵀ with g = eps e_u + e_v - e_w keeps A SPD.
+  test::SyntheticProblem p = test::squareProblem(32);
+  const TexelGrid& g = p.grid;
+  auto unknownAt = [&](int x, int y) {
+    return g.unknownOfTexel[static_cast<size_t>(g.texelIndex(x, y))];
+  };
+  const int u = unknownAt(0, 16), v = unknownAt(1, 16), w = unknownAt(1, 17);
+  ASSERT_TRUE(u >= 0 && v >= 0 && w >= 0);
+  const double c = 4000.0, eps = 1e-3;
+  std::vector<Eigen::Triplet<double>> t;
+  const std::array<std::pair<int, double>, 3> gv = {{{u, eps}, {v, 1.0}, {w, -1.0}}};
+  for (const auto& [i, gi] : gv)
+    for (const auto& [j, gj] : gv) t.emplace_back(i, j, c * gi * gj);
+  Eigen::SparseMatrix<double> extra(p.stiffness.rows(), p.stiffness.cols());
+  extra.setFromTriplets(t.begin(), t.end());
+  p.stiffness += extra;
+  const Eigen::SparseMatrix<double> a = p.system(1.0);
+  ASSERT_LT(a.coeff(u, u), 0.25 * (std::abs(a.coeff(u, v)) + std::abs(a.coeff(u, w))));
+
+  auto levelZero = [&](int reach) {
+    MultigridOptions o;
+    o.weakRowReach = reach;
+    MultigridSolver<double> mg(o);
+    mg.initAndUpdate(p.grid, a);
+    return mg.levelInfo().front();
+  };
+  const MultigridLevelInfo paper = levelZero(0), locked = levelZero(2);
+  EXPECT_EQ(paper.unknowns, locked.unknowns);
+  // Some interior texels of the 5 x 5 window around u moved to the boundary, and no others.
+  EXPECT_GT(locked.boundary, paper.boundary);
+  EXPECT_LE(locked.boundary, paper.boundary + 25);
+  EXPECT_EQ(locked.interior + locked.boundary, paper.interior + paper.boundary);
+  // Without a weak row the reach changes nothing.
+  const test::SyntheticProblem plain = test::squareProblem(32);
+  MultigridSolver<double> mg;
+  mg.initAndUpdate(plain.grid, plain.system(1.0));
+  MultigridOptions off;
+  off.weakRowReach = 0;
+  MultigridSolver<double> paperSplit(off);
+  paperSplit.initAndUpdate(plain.grid, plain.system(1.0));
+  EXPECT_EQ(mg.levelInfo().front().boundary, paperSplit.levelInfo().front().boundary);
+
+  // Still the solution of A x = b.
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 1, 9);
+  const Eigen::MatrixXd exact = solveDirect(a, b);
+  MultigridSolver<double> solver;
+  solver.initAndUpdate(p.grid, a);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 1);
+  solver.solve(b, x, {40, 1e-13});
+  EXPECT_LT((x - exact).norm() / exact.norm(), 1e-9);
 }

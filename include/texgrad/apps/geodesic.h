@@ -66,7 +66,8 @@ struct GeodesicOptions {
   SolverSettings solver;
   /// Throws InvalidInputError naming the first bad field.
   void validate() const;
-  /// Defaults for frame-by-frame GeodesicSolver::update(): kInteractiveSweeps sweeps per level.
+  /// Defaults for frame-by-frame GeodesicSolver::update(): kInteractiveSweeps sweeps per level
+  /// and the paper's V-cycle (no line relaxation, no weak-row split), the cheapest per frame.
   static GeodesicOptions interactive();
 };
 

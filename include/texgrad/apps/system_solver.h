@@ -48,7 +48,8 @@ class SystemSolver {
   SystemSolver(SystemSolver&&) noexcept;
   SystemSolver& operator=(SystemSolver&&) noexcept;
 
-  /// Symbolic phase for the sparsity pattern of every later A (values unused).
+  /// Symbolic phase for the sparsity pattern of every later A (multigrid: its values guide the
+  /// interior/boundary split, MultigridOptions::weakRowReach; the direct solver ignores them).
   void init(const Eigen::SparseMatrix<double>& pattern);
   /// Numeric phase for a new A with the same pattern (new alpha, beta or metric). The solver
   /// keeps a copy of A for residuals.

@@ -7,6 +7,7 @@
 #include <iosfwd>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "texgrad/atlas/texel_grid.h"
 #include "texgrad/solver/grid_hierarchy.h"
@@ -21,6 +22,14 @@ struct MultigridOptions {
   int levels = 4;
   /// n: Gauss–Seidel sweeps over interior texels per level, before and after (paper default 3).
   int sweeps = 3;
+  /// Interior texels whose stencil couples more than this many times as strongly along one grid
+  /// axis as across it are also relaxed by lines along that axis (charts stretched by their
+  /// parameterisation, where point Gauss–Seidel smooths poorly); 0 turns line relaxation off.
+  double lineRatio = 8.0;
+  /// Texels within this many texels of a boundary texel with a weak row (diagonal below a
+  /// quarter of its off-diagonal magnitudes: texels their chart barely covers) are solved
+  /// directly with the boundary, on the texel grid; 0 turns this off (paper §6.1 split).
+  int weakRowReach = 3;
   /// A level with fewer unknowns than this is not coarsened further (it is solved directly).
   int minCoarseUnknowns = 256;
   /// Worker threads for relaxation and transfers; 0 = all available. Results do not depend on it.
@@ -47,6 +56,19 @@ struct MultigridStats {
   double updateSeconds = 0.0;     ///< total time in update
 };
 
+/// One level of a multigrid hierarchy, as MultigridSolver::summary() lists it.
+struct MultigridLevelInfo {
+  int unknowns = 0;
+  int interior = 0;             ///< relaxed by Gauss–Seidel (0 on a coarsest level solved directly)
+  int boundary = 0;             ///< solved directly with the interior locked
+  int64_t lineTexels = 0;       ///< interior texels also relaxed by lines (lineRatio)
+  int64_t nonZeros = 0;         ///< of A^l
+  int64_t boundaryNonZeros = 0; ///< of A_bb^l (of A^l on a coarsest level solved directly)
+  int64_t factorNonZeros = 0;   ///< of the Cholesky factor of that block
+  int64_t slots = 0;            ///< lattice slots of the level's boxes
+  bool direct = false;          ///< the coarsest level, solved directly
+};
+
 /// Multigrid solver for A x = b over the unknowns of a TexelGrid, A = alpha M + S (n x n SPD,
 /// unknown order of the TexelGrid). Interior texels are relaxed by multi-colour Gauss–Seidel on
 /// 9-point stencils held as dense per-slot arrays; boundary texels and the coarsest level are
@@ -66,7 +88,8 @@ class MultigridSolver {
   MultigridSolver& operator=(MultigridSolver&&) noexcept;
 
   /// Symbolic phase: builds the hierarchy, the coarse sparsity patterns, the interior/boundary
-  /// split and the CHOLMOD analyses. `pattern` has the sparsity of every later A (values unused).
+  /// split and the CHOLMOD analyses. `pattern` has the sparsity of every later A; its values
+  /// only guide the split (weakRowReach), so pass the first A when it is known.
   /// Matrices reach init, update and initAndUpdate as SparseSum: they must be compressed.
   void init(const TexelGrid& grid, const SparseSum& pattern);
   /// Numeric phase: Galerkin products A^{l+1} = Pᵀ A^l P, stencils, boundary and coarse
@@ -108,7 +131,9 @@ class MultigridSolver {
   const MultigridStats& stats() const;
   /// Time per phase accumulated over every cycle since the last update.
   const PhaseTimes& cycleTimes() const;
-  /// Table of levels: unknowns, interior/boundary split and non-zeros per level.
+  /// Per level: unknowns, interior/boundary split, line texels and non-zeros (valid after update).
+  std::vector<MultigridLevelInfo> levelInfo() const;
+  /// Table of levelInfo().
   std::string summary() const;
   /// Options in use.
   const MultigridOptions& options() const;
