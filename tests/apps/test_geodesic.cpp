@@ -295,6 +295,41 @@ TEST(Geodesic, ThreadCountDoesNotChangeTheResult) {
   EXPECT_EQ((solved[0] - solved[1]).cwiseAbs().maxCoeff(), 0.0);
 }
 
+TEST(Geodesic, UpdatesStopCyclingOnTheHeatOnceFloatRoundingIsReached) {
+  const TexelDomain domain(procedural::cubeSphere(8), 256, 256);
+  const GeodesicSource source = GeodesicSource::atPoint({0.3, 0.5, 0.8});
+  GeodesicSolver exact(domain, directOptions());
+  exact.setSource(source);
+  exact.solve();
+  GeodesicSolver solver(domain, GeodesicOptions::interactive());
+  solver.setSource(source);
+  int updates = 0;
+  for (; updates < 60 && !solver.heatSettled(); ++updates) solver.update();
+  ASSERT_TRUE(solver.heatSettled()) << "after " << updates << " updates";
+  const double heatError =
+      (solver.diffused() - exact.diffused()).norm() / exact.diffused().norm();
+  std::cout << "heat settled after " << updates << " updates, relative error " << heatError
+            << "\n";
+  EXPECT_LE(heatError, 1e-5);
+  // Later updates leave u as it is and go on refining the distances.
+  const Eigen::MatrixXd heat = solver.diffused();
+  const auto rms = [&] {
+    return (solver.distances() - exact.distances()).norm() /
+           std::sqrt(static_cast<double>(domain.unknowns())) / exact.distances().maxCoeff();
+  };
+  const double before = rms();
+  for (int k = 0; k < 20; ++k) solver.update();
+  EXPECT_EQ((solver.diffused() - heat).cwiseAbs().maxCoeff(), 0.0);
+  std::cout << "distance RMS / max at settling " << before << ", 20 updates later " << rms()
+            << "\n";
+  EXPECT_LE(rms(), 5e-5);
+  // A new source starts the heat cycles again.
+  solver.setSource(GeodesicSource::atPoint({-0.3, 0.5, 0.8}));
+  EXPECT_FALSE(solver.heatSettled());
+  solver.update();
+  EXPECT_GT((solver.diffused() - heat).cwiseAbs().maxCoeff(), 0.0);
+}
+
 TEST(Geodesic, TwoSourcesGiveTheNearerDistance) {
   const TexelDomain domain(procedural::cubeSphere(16), 256, 256);
   const std::array<GeodesicSource, 2> sources{GeodesicSource::atPoint({0.0, 0.0, 1.0}),

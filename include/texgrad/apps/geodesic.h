@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -145,8 +146,14 @@ class GeodesicSolver {
   /// residual), and y is moved by its offset after each cycle so its constant part stays small:
   /// A2's float rounding then limits the distances to about 1e-4 of the largest distance (RMS;
   /// spot at 1024²), far below what an update changes while it refines; solve() is exact.
-  /// Float multigrid updates measure no residual (the reports hold none; see residual()).
+  /// The heat cycle measures its residual (fused into its last sweeps); once that is below 1e-4
+  /// and a cycle no longer reduces it by 10% (float rounding: more cycles would not change u),
+  /// later updates skip the heat cycle and the divergence and refine only y (heatSettled()).
+  /// The distance cycle measures no residual (its report holds none; see residual()).
   void update();
+  /// True once update() has stopped cycling on the heat (see update()); false after
+  /// setSources, setAlpha and until then.
+  bool heatSettled() const { return heatSettled_; }
   /// Largest relative residual ||b - A x|| / ||b|| (double) of the current heat and distance
   /// iterates; one sparse product per system, so displays ask for it a few times a second.
   double residual() const;
@@ -217,6 +224,9 @@ class GeodesicSolver {
   Eigen::VectorXd distances_;
   SolveReport diffusionReport_, distanceReport_;
   GeodesicTimings timings_;
+  bool heatSettled_ = false;  ///< update() no longer cycles on the heat
+  double heatResidual_ = std::numeric_limits<double>::infinity();  ///< of the last heat update
+  bool heatChanged_ = true;   ///< u changed since the divergence was last computed
 };
 
 /// One-shot heat-method distances from `sources` (at least one): GeodesicSolver + solve(), plus
