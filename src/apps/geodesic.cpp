@@ -394,9 +394,9 @@ void GeodesicSolver::diffusionStep(bool full) {
       full ? diffusionSolver_.solve(impulse_, u_) : diffusionSolver_.refine(impulse_, u_, true);
   double residual = lastResidual(diffusionReport_);
   if (dirichletSolver_) {
-    const SolveReport report = full ? dirichletSolver_->solve(impulseDirichlet_, uDirichlet_)
-                                    : dirichletSolver_->refine(impulseDirichlet_, uDirichlet_,
-                                                               true);
+    const SolveReport report = full
+                                   ? dirichletSolver_->solve(impulseDirichlet_, uDirichlet_)
+                                   : dirichletSolver_->refine(impulseDirichlet_, uDirichlet_, true);
     residual = std::max(residual, lastResidual(report));
     heat_ = 0.5 * (u_ + uDirichlet_);
   }

@@ -5,6 +5,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
+#include <utility>
 
 #include "solver/level_system.h"
 
@@ -26,10 +28,10 @@ std::array<int64_t, 6> offLineOffsets(const SlotLine& line) {
 
 /// Per-slot roles for collecting lines.
 enum SlotRole : uint8_t {
-  kOff = 0,        ///< not on a line
-  kAlongX = 1,     ///< interior, strongly coupled along x
-  kAlongY = 2,     ///< interior, strongly coupled along y
-  kLineEnd = 3,    ///< boundary slot whose row is a 3 x 3 stencil: may join a line
+  kOff = 0,      ///< not on a line
+  kAlongX = 1,   ///< interior, strongly coupled along x
+  kAlongY = 2,   ///< interior, strongly coupled along y
+  kLineEnd = 3,  ///< boundary slot whose row is a 3 x 3 stencil: may join a line
 };
 
 /// A line needs its strong coupling to carry at least this fraction of the diagonal (0.75 for
@@ -79,28 +81,38 @@ void collectRuns(const std::vector<uint8_t>& roles, uint8_t role, int64_t first,
 /// shiftDiagonal), and solving it would blow rounding up.
 constexpr double kSmallPivot = 1e-6;
 
+/// One step of the Thomas recurrence along a line of `axis`: the pivot of the row with stencil
+/// w, given c'_{i-1} of the row before it on the line (`first`: w starts the line). The
+/// returned pair is (pivot, c'_i = w_next / pivot).
+std::pair<double, double> thomasStep(const std::array<double, 9>& w, int axis,
+                                     double previousFactor, bool first) {
+  const auto& planes = kStencilOfPlane[static_cast<size_t>(axis)];
+  const double pivot = w[4] - (first ? 0.0 : w[static_cast<size_t>(planes[6])] * previousFactor);
+  return {pivot, w[static_cast<size_t>(planes[7])] / pivot};
+}
+
 /// Appends `run` to `out`, cut before every slot whose Thomas pivot would be small, keeping the
 /// pieces of at least two slots.
 void appendSplitAtSmallPivots(const GridLevel& level, const SparseSum& a, int axis,
                               const SlotLine& run, std::vector<SlotLine>& out) {
-  const auto& planes = kStencilOfPlane[static_cast<size_t>(axis)];
   int begin = 0;
   auto emit = [&](int end) {
     if (end - begin >= 2)
-      out.push_back({run.first + begin * int64_t{run.stride}, end - begin, run.stride, run.width, 0});
+      out.push_back(
+          {run.first + begin * int64_t{run.stride}, end - begin, run.stride, run.width, 0});
   };
   double previousFactor = 0.0;
   for (int i = 0; i < run.count; ++i) {
     const int64_t s = run.first + i * int64_t{run.stride};
     const std::array<double, 9> w =
         stencilRow(level, a, level.unknownOfSlot[static_cast<size_t>(s)]);
-    double pivot = w[4] - (i > begin ? w[static_cast<size_t>(planes[6])] * previousFactor : 0.0);
+    auto [pivot, factor] = thomasStep(w, axis, previousFactor, i == begin);
     if (i > begin && pivot < kSmallPivot * w[4]) {
       emit(i);
       begin = i;
-      pivot = w[4];
+      factor = thomasStep(w, axis, 0.0, true).second;
     }
-    previousFactor = w[static_cast<size_t>(planes[7])] / pivot;
+    previousFactor = factor;
   }
   emit(run.count);
 }
@@ -117,11 +129,10 @@ void fillLine(const GridLevel& level, const SparseSum& a, int axis, const SlotLi
         stencilRow(level, a, level.unknownOfSlot[static_cast<size_t>(s)]);
     T* c = coeffs + static_cast<int64_t>(i) * kLinePlanes;
     for (int p = 0; p < 8; ++p) c[p] = static_cast<T>(w[static_cast<size_t>(planes[p])]);
-    const double previous = i > 0 ? w[static_cast<size_t>(planes[6])] : 0.0;
-    const double inverse = 1.0 / (w[4] - previous * previousFactor);
-    previousFactor = w[static_cast<size_t>(planes[7])] * inverse;
-    c[8] = static_cast<T>(previousFactor);
-    c[9] = static_cast<T>(inverse);
+    const auto [pivot, factor] = thomasStep(w, axis, previousFactor, i == 0);
+    previousFactor = factor;
+    c[8] = static_cast<T>(factor);
+    c[9] = static_cast<T>(1.0 / pivot);
   }
 }
 
@@ -138,7 +149,7 @@ void solveLine(const SlotLine& line, const T* c, const T* b, T* x) {
     T r = b[s] - (((ci[0] * x[s + o[0]] + ci[1] * x[s + o[1]]) +
                    (ci[2] * x[s + o[2]] + ci[3] * x[s + o[3]])) +
                   (ci[4] * x[s + o[4]] + ci[5] * x[s + o[5]]));
-    r -= ci[6] * x[s - st];  // the locked slot before the line, then d_{i-1}
+    r -= ci[6] * x[s - st];                  // the locked slot before the line, then d_{i-1}
     if (i == n - 1) r -= ci[7] * x[s + st];  // the locked slot after the line
     x[s] = r * ci[9];
   }

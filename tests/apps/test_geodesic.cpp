@@ -306,10 +306,8 @@ TEST(Geodesic, UpdatesStopCyclingOnTheHeatOnceFloatRoundingIsReached) {
   int updates = 0;
   for (; updates < 60 && !solver.heatSettled(); ++updates) solver.update();
   ASSERT_TRUE(solver.heatSettled()) << "after " << updates << " updates";
-  const double heatError =
-      (solver.diffused() - exact.diffused()).norm() / exact.diffused().norm();
-  std::cout << "heat settled after " << updates << " updates, relative error " << heatError
-            << "\n";
+  const double heatError = (solver.diffused() - exact.diffused()).norm() / exact.diffused().norm();
+  std::cout << "heat settled after " << updates << " updates, relative error " << heatError << "\n";
   EXPECT_LE(heatError, 1e-5);
   // Later updates leave u as it is and go on refining the distances.
   const Eigen::MatrixXd heat = solver.diffused();

@@ -214,7 +214,7 @@ class GeodesicSolver {
   std::vector<ResolvedSource> sources_;
   std::vector<std::vector<fem::TexelWeight>> sourceWeights_;  ///< phi_t(p_s) per source
   std::vector<NearFieldTexel> nearField_;                     ///< sorted by source
-  std::vector<uint8_t> reachable_;                      ///< per unknown: connected to a source
+  std::vector<uint8_t> reachable_;  ///< per unknown: connected to a source
   std::vector<int32_t> component_;  ///< per unknown: its component of A1's support graph
   int32_t componentCount_ = 0;
   std::vector<int32_t> vertexFaceBegin_, vertexFaces_;  ///< faces around each 3-D vertex (CSR)
@@ -226,7 +226,7 @@ class GeodesicSolver {
   GeodesicTimings timings_;
   bool heatSettled_ = false;  ///< update() no longer cycles on the heat
   double heatResidual_ = std::numeric_limits<double>::infinity();  ///< of the last heat update
-  bool heatChanged_ = true;   ///< u changed since the divergence was last computed
+  bool heatChanged_ = true;  ///< u changed since the divergence was last computed
 };
 
 /// One-shot heat-method distances from `sources` (at least one): GeodesicSolver + solve(), plus
