@@ -164,7 +164,9 @@ struct SystemSolver::Impl {
   }
 
   /// Float V-cycles with the residual in double (mixed-precision iterative refinement): each
-  /// cycle corrects x by V(b - A x), so accuracy is not limited by float rounding of A x.
+  /// cycle corrects x by V(b - A x), so accuracy is not limited by float rounding of A x. A
+  /// float cycle that diverges (divergesFrom) is undone, and this solve and every later one
+  /// cycle in double instead (useDoubleCycles).
   SolveReport refinedCycles(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, int count) {
     SolveReport report;
     const auto start = std::chrono::steady_clock::now();
@@ -172,9 +174,18 @@ struct SystemSolver::Impl {
       const double norm = b.norm() > 0 ? b.norm() : 1.0;
       report.residuals.push_back(std::sqrt(initialResidual(b, x)) / norm);
       for (int k = 0; k < count; ++k) {
-        multigridFloat->precondition(r, z);
-        const double change = addInPlace(x, z);
-        const double rr = residual(a, b, x, r);
+        visitMultigrid([&](const auto& solver) {
+          solver.precondition(r, z);
+          return 0;
+        });
+        double change = addInPlace(x, z);
+        double rr = residual(a, b, x, r);
+        if (multigridFloat && divergesFrom(report.residuals.back(), std::sqrt(rr) / norm)) {
+          x -= z;
+          rr = residual(a, b, x, r);
+          change = 0.0;
+          useDoubleCycles();
+        }
         ++report.iterations;
         report.residuals.push_back(std::sqrt(rr) / norm);
         report.rmsChange.push_back(
@@ -188,6 +199,24 @@ struct SystemSolver::Impl {
     });
     report.times.other = secondsSince(start);
     return report;
+  }
+
+  /// A float cycle diverges when it takes the relative residual from above kDivergenceFloor to
+  /// more than kDivergenceGrowth times it, or to NaN: float rounding amplified by a nearly
+  /// singular A (a unit square stretched 3000:1 with screening 1e-7 grows by about 1e4 a
+  /// cycle). Below the floor, residuals near double rounding may rise and fall harmlessly.
+  static constexpr double kDivergenceGrowth = 2.0;
+  static constexpr double kDivergenceFloor = 1e-10;
+  static bool divergesFrom(double before, double after) {
+    return before > kDivergenceFloor && !(after <= kDivergenceGrowth * before);
+  }
+
+  /// Replaces the float cycles by double cycles on the current A, for good.
+  void useDoubleCycles() {
+    multigridDouble = std::make_unique<MultigridSolver<double>>(settings.multigrid);
+    multigridDouble->initAndUpdate(grid, a);
+    multigridFloat.reset();
+    settings.singlePrecision = false;
   }
 
   /// r = b - A x and ||r||^2; reuses the residual left by the previous solve when x is the

@@ -2,6 +2,9 @@
 // problem, against CHOLMOD.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <iostream>
+
 #include "../solver/synthetic_problem.h"
 #include "texgrad/apps/system_solver.h"
 #include "texgrad/core/error.h"
@@ -46,6 +49,38 @@ TEST(SystemSolver, RefineConvergesToFloatAccuracyAndReportsTheTrueResidual) {
     previous = reported;
   }
   EXPECT_LT((x - truth).norm() / truth.norm(), 1e-5);
+  EXPECT_TRUE(solver.settings().singlePrecision);  // no divergence here: the cycles stay float
+}
+
+TEST(SystemSolver, DivergingFloatCyclesAreUndoneAndDoubleCyclesTakeOver) {
+  // A square stretched about 3000:1 with screening 1e-7: A is so nearly singular that float
+  // rounding in the V-cycle's coarse corrections grows the residual by about 1e4 a cycle.
+  const test::SyntheticProblem p = test::squareProblem(40, 1.0, 1e-7);
+  const Eigen::SparseMatrix<double> a = p.system(1e-7);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 1, 5);
+  CholmodSolver direct;
+  direct.compute(a);
+  const Eigen::MatrixXd truth = direct.solve(b);
+
+  SolverSettings settings = floatMultigrid();
+  settings.cycles = 12;
+  SystemSolver solver(p.grid, settings);
+  solver.initAndUpdate(a);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 1);
+  const SolveReport report = solver.solve(b, x);
+  std::cout << report.toString();
+  EXPECT_FALSE(solver.settings().singlePrecision);
+  EXPECT_LE(*std::max_element(report.residuals.begin(), report.residuals.end()),
+            report.residuals.front());
+  // Double cycles stop near 1e-8 here (double rounding on this A); the float ones had reached
+  // 1e6 by now.
+  std::cout << "error against CHOLMOD " << (x - truth).norm() / truth.norm() << "\n";
+  EXPECT_LT(relativeResidual(a, b, x), 1e-7);
+  EXPECT_LT((x - truth).norm() / truth.norm(), 1e-4);
+  // Later steps keep cycling in double.
+  solver.step(b, x);
+  EXPECT_FALSE(solver.settings().singlePrecision);
+  EXPECT_LT(relativeResidual(a, b, x), 1e-7);
 }
 
 TEST(SystemSolver, RefineWithoutResidualReportsNoneAndResidualIsMeasuredOnDemand) {

@@ -31,7 +31,9 @@ struct SolverSettings {
   MultigridOptions multigrid;  ///< levels, sweeps, threads
   /// Float V-cycles (factorisations stay double); the residual is formed in double each cycle
   /// (mixed-precision refinement, or the double-precision CG around a float V-cycle), so float
-  /// cycles reach double-precision accuracy.
+  /// cycles reach double-precision accuracy. If a refinement cycle makes the residual diverge
+  /// (float rounding on a nearly singular A), the solver undoes it and changes to double cycles
+  /// for good (SystemSolver::settings() then says so).
   bool singlePrecision = true;
   int cycles = 6;          ///< V-cycles (Multigrid) or max CG iterations / 20 (MultigridCg)
   double tolerance = 0.0;  ///< stop early below this relative residual (0: run all cycles)
