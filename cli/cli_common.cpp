@@ -225,7 +225,8 @@ void addSolverOptions(CLI::App* cmd, SolverArgs& args, const SolverSettings& def
       ->default_val(MultigridOptions{}.weakRowReach)
       ->check(CLI::Range(0, 8));
   cmd->add_option("--precision", args.precision,
-                  "float or double V-cycles (factorisations are always double)")
+                  "float or double V-cycles (factorisations are always double; float solves "
+                  "change to double cycles if a float cycle diverges)")
       ->default_val("float")
       ->check(CLI::IsMember({"float", "double"}));
   cmd->add_option("--threads", args.threads, "Worker threads; 0 = all cores")
