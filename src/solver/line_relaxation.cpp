@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <type_traits>
 #include <utility>
 
 #include "solver/level_system.h"
@@ -76,10 +77,14 @@ void collectRuns(const std::vector<uint8_t>& roles, uint8_t role, int64_t first,
   }
 }
 
-/// A Thomas pivot below this fraction of its diagonal entry ends a line: the block is then nearly
-/// singular (coarse rows of dependent prolongation columns, positive definite only through
-/// shiftDiagonal), and solving it would blow rounding up.
-constexpr double kSmallPivot = 1e-6;
+/// A Thomas pivot below this fraction of its diagonal entry ends a line of T: the block is then
+/// nearly singular (coarse rows of dependent prolongation columns, positive definite only
+/// through shiftDiagonal), and solving it in T would blow rounding up (pivot / diagonal times
+/// T's epsilon is the relative error of the line's solve). Double lines keep blocks float ones
+/// cut: a square stretched ~30000:1 with screening 1e-9 cuts the last texel of every line at
+/// 2.5e-7, and double cycles with that cut stalled at a residual of 6e-9 instead of 1e-12.
+template <typename T>
+constexpr double kSmallPivot = std::is_same_v<T, float> ? 1e-6 : 1e-12;
 
 /// One step of the Thomas recurrence along a line of `axis`: the pivot of the row with stencil
 /// w, given c'_{i-1} of the row before it on the line (`first`: w starts the line). The
@@ -94,7 +99,7 @@ std::pair<double, double> thomasStep(const std::array<double, 9>& w, int axis,
 /// Appends `run` to `out`, cut before every slot whose Thomas pivot would be small, keeping the
 /// pieces of at least two slots.
 void appendSplitAtSmallPivots(const GridLevel& level, const SparseSum& a, int axis,
-                              const SlotLine& run, std::vector<SlotLine>& out) {
+                              double smallPivot, const SlotLine& run, std::vector<SlotLine>& out) {
   int begin = 0;
   auto emit = [&](int end) {
     if (end - begin >= 2)
@@ -107,7 +112,7 @@ void appendSplitAtSmallPivots(const GridLevel& level, const SparseSum& a, int ax
     const std::array<double, 9> w =
         stencilRow(level, a, level.unknownOfSlot[static_cast<size_t>(s)]);
     auto [pivot, factor] = thomasStep(w, axis, previousFactor, i == begin);
-    if (i > begin && pivot < kSmallPivot * w[4]) {
+    if (i > begin && pivot < smallPivot * w[4]) {
       emit(i);
       begin = i;
       factor = thomasStep(w, axis, 0.0, true).second;
@@ -190,7 +195,8 @@ void assignLines(const GridLevel& level, const SparseSum& a, const LevelSystem& 
   for (size_t ax = 0; ax < 2; ++ax)
     for (size_t parity = 0; parity < 2; ++parity)
       for (const SlotLine& run : runs[ax][parity])
-        appendSplitAtSmallPivots(level, a, static_cast<int>(ax), run, set.lines[ax][parity]);
+        appendSplitAtSmallPivots(level, a, static_cast<int>(ax), kSmallPivot<T>, run,
+                                 set.lines[ax][parity]);
   for (auto& byParity : set.lines)
     for (std::vector<SlotLine>& group : byParity)
       for (SlotLine& line : group) {
