@@ -321,11 +321,12 @@ TEST(Geodesic, UpdatesStopCyclingOnTheHeatOnceFloatRoundingIsReached) {
   std::cout << "distance RMS / max at settling " << before << ", 20 updates later " << rms()
             << "\n";
   EXPECT_LE(rms(), 5e-5);
-  // A new source starts the heat cycles again.
+  // A new source resets u to zero and starts the heat cycles again (a skipped cycle would
+  // leave u at zero).
   solver.setSource(GeodesicSource::atPoint({-0.3, 0.5, 0.8}));
   EXPECT_FALSE(solver.heatSettled());
   solver.update();
-  EXPECT_GT((solver.diffused() - heat).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_GT(solver.diffused().cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST(Geodesic, TwoSourcesGiveTheNearerDistance) {
