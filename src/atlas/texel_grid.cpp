@@ -1,5 +1,5 @@
-// buildTexelGrid: exact cell coverage from the lattice clipper, then texel classes and numbering
-// (DESIGN.md §2): active if a footprint cell is covered, interior if all four lie in one chart.
+// buildTexelGrid: the grid's extent from the UV bounds, exact cell coverage per chart from the
+// lattice clipper, then the lattice's classification (classifyLattice).
 #include "texgrad/atlas/texel_grid.h"
 
 #include <tbb/parallel_for.h>
@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 #include "texgrad/atlas/cell_clipping.h"
 #include "texgrad/core/error.h"
@@ -82,8 +83,8 @@ void clipFaces(const TexturedMesh& mesh, const Atlas& atlas, const TexelGrid& g,
 
 /// Accumulates covered area per cell and the charts meeting each cell. Faces are clipped in
 /// parallel; the sums run in face order, so the result does not depend on the thread count.
-void coverCells(const TexturedMesh& mesh, const Atlas& atlas, TexelGrid& g,
-                std::vector<double>& area, std::vector<uint8_t>& multi) {
+void coverCells(const TexturedMesh& mesh, const Atlas& atlas, const TexelGrid& g,
+                CellCover& cover) {
   const auto faces = static_cast<int32_t>(mesh.faceCount());
   const int32_t tasks = (faces + kFacesPerTask - 1) / kFacesPerTask;
   std::vector<std::vector<CellShare>> shares(static_cast<size_t>(tasks));
@@ -93,54 +94,14 @@ void coverCells(const TexturedMesh& mesh, const Atlas& atlas, TexelGrid& g,
   });
   for (std::vector<CellShare>& task : shares) {
     for (const CellShare& share : task) {
-      area[static_cast<size_t>(share.cell)] += share.area;
-      int32_t& owner = g.cellChart[static_cast<size_t>(share.cell)];
-      if (owner >= 0 && owner != share.chart) multi[static_cast<size_t>(share.cell)] = 1;
+      const auto cell = static_cast<size_t>(share.cell);
+      cover.area[cell] += share.area;
+      int32_t& owner = cover.chart[cell];
+      if (owner >= 0 && owner != share.chart) cover.severalCharts[cell] = 1;
       if (owner < 0 || share.chart < owner) owner = share.chart;
     }
     std::vector<CellShare>().swap(task);
   }
-}
-
-void classifyCells(TexelGrid& g, const std::vector<double>& area,
-                   const std::vector<uint8_t>& multi) {
-  constexpr double kTolerance = 1e-9;
-  g.cellCoverage.assign(area.size(), CellCoverage::Empty);
-  for (size_t k = 0; k < area.size(); ++k) {
-    if (area[k] <= 0.0) continue;
-    const bool full = !multi[k] && std::abs(area[k] - 1.0) <= kTolerance;
-    g.cellCoverage[k] = full ? CellCoverage::Full : CellCoverage::Partial;
-    if (area[k] > 1.0 + kTolerance) g.overlapCells.push_back(static_cast<int32_t>(k));
-  }
-}
-
-void classifyTexels(TexelGrid& g, const std::vector<uint8_t>& multi) {
-  const size_t texels = static_cast<size_t>(g.nx) * static_cast<size_t>(g.ny);
-  g.texelClass.assign(texels, TexelClass::Inactive);
-  g.texelChart.assign(texels, -1);
-  g.unknownOfTexel.assign(texels, -1);
-  for (int y = 0; y < g.ny; ++y)
-    for (int x = 0; x < g.nx; ++x) {
-      int covered = 0, full = 0;
-      int32_t chart = -1;
-      bool severalCharts = false;
-      for (int b = y - 1; b <= y; ++b)
-        for (int a = x - 1; a <= x; ++a) {
-          const int cell = g.cellIndex(a, b);
-          if (g.cellCoverage[cell] == CellCoverage::Empty) continue;
-          ++covered;
-          full += g.cellCoverage[cell] == CellCoverage::Full;
-          severalCharts |= multi[cell] != 0 || (chart >= 0 && chart != g.cellChart[cell]);
-          if (chart < 0 || g.cellChart[cell] < chart) chart = g.cellChart[cell];
-        }
-      if (covered == 0) continue;
-      const int t = g.texelIndex(x, y);
-      g.texelClass[t] = full == 4 && !severalCharts ? TexelClass::Interior : TexelClass::Boundary;
-      g.texelChart[t] = chart;
-      if (severalCharts) g.multiChartTexels.push_back(t);
-      g.unknownOfTexel[t] = static_cast<int32_t>(g.texelOfUnknown.size());
-      g.texelOfUnknown.push_back(t);
-    }
 }
 
 }  // namespace
@@ -153,13 +114,9 @@ TexelGrid buildTexelGrid(const TexturedMesh& mesh, const Atlas& atlas, int width
   g.imageWidth = width;
   g.imageHeight = height;
   setExtent(mesh, g);
-  const size_t cells = static_cast<size_t>(g.nx + 1) * static_cast<size_t>(g.ny + 1);
-  std::vector<double> area(cells, 0.0);
-  std::vector<uint8_t> multi(cells, 0);
-  g.cellChart.assign(cells, -1);
-  coverCells(mesh, atlas, g, area, multi);
-  classifyCells(g, area, multi);
-  classifyTexels(g, multi);
+  CellCover cover(g.cellCount());
+  coverCells(mesh, atlas, g, cover);
+  classifyLattice(g, std::move(cover));
   return g;
 }
 

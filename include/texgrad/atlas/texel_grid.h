@@ -1,83 +1,16 @@
-// The texel lattice over the atlas: cell coverage, texel classes and the unknown numbering.
+// Rasterises a mesh's atlas into the texel lattice: exact cell coverage per chart, classified by
+// the lattice's rule (texgrad/lattice/texel_grid.h).
 #pragma once
-
-#include <Eigen/Core>
-#include <cstdint>
-#include <vector>
 
 #include "texgrad/atlas/atlas.h"
 #include "texgrad/io/textured_mesh.h"
+#include "texgrad/lattice/texel_grid.h"
 
 namespace texgrad {
 
-/// Class of a texel (DESIGN.md §2): footprint overlap with the atlas domain M.
-enum class TexelClass : uint8_t {
-  Inactive = 0,  ///< footprint does not meet M (area 0)
-  Interior = 1,  ///< footprint inside a single chart
-  Boundary = 2,  ///< footprint meets M but is not inside one chart
-};
-
-/// Coverage of one lattice cell (unit square between four texel centres) by the atlas.
-enum class CellCoverage : uint8_t {
-  Empty = 0,    ///< no chart overlaps the cell with positive area
-  Partial = 1,  ///< at least one chart overlaps it, but it is not entirely inside one chart
-  Full = 2,     ///< the cell lies entirely inside a single chart
-};
-
-/// Texel lattice for a W x H texture. Continuous texel coordinates p = (u W - 0.5, v H - 0.5)
-/// put texel centres on the integer lattice; cell (a, b) is the square [a, a+1] x [b, b+1].
-///
-/// The grid spans every texel any chart can touch, so it may extend beyond the image when UVs
-/// leave [0, 1] or charts touch the border: grid texel (x, y) is image texel (x + x0, y + y0).
-/// Texels outside the image are solved like any other but are not stored in output images.
-struct TexelGrid {
-  int imageWidth = 0, imageHeight = 0;  ///< W, H of the texture
-  int x0 = 0, y0 = 0;                   ///< image coordinates of grid texel (0, 0)
-  int nx = 0, ny = 0;                   ///< grid size in texels
-
-  /// Per grid texel (y * nx + x): class.
-  std::vector<TexelClass> texelClass;
-  /// Per grid texel: owning chart, -1 if inactive; for a texel whose footprint meets several
-  /// charts, the chart with the smallest index (listed in multiChartTexels).
-  std::vector<int32_t> texelChart;
-  /// Per grid texel: unknown index (active texels numbered in row-major grid order) or -1.
-  std::vector<int32_t> unknownOfTexel;
-  /// Per unknown: grid texel index (y * nx + x).
-  std::vector<int32_t> texelOfUnknown;
-  /// Grid texels whose footprint meets two or more charts (the paper assumes none).
-  std::vector<int32_t> multiChartTexels;
-
-  /// Cells: cell (a, b) of the grid is stored at (b + 1) * (nx + 1) + (a + 1), a in [-1, nx-1].
-  /// Per cell: coverage, and the chart covering it (-1 if empty; smallest index if several).
-  std::vector<CellCoverage> cellCoverage;
-  std::vector<int32_t> cellChart;
-  /// Cells whose covered area exceeds the cell (stacked or folded UVs: several surface points
-  /// per texel), as cell indices.
-  std::vector<int32_t> overlapCells;
-
-  /// Number of active texels (unknowns).
-  int unknownCount() const { return static_cast<int>(texelOfUnknown.size()); }
-  /// Linear index of grid texel (x, y).
-  int texelIndex(int x, int y) const { return y * nx + x; }
-  /// Linear index of grid cell (a, b), a in [-1, nx - 1], b in [-1, ny - 1].
-  int cellIndex(int a, int b) const { return (b + 1) * (nx + 1) + (a + 1); }
-  /// Converts a UV point to continuous grid coordinates (texel centres at integers).
-  Eigen::Vector2d toGrid(const Eigen::Vector2d& uv) const {
-    return {uv.x() * imageWidth - 0.5 - x0, uv.y() * imageHeight - 0.5 - y0};
-  }
-  /// Converts continuous grid coordinates back to UV.
-  Eigen::Vector2d toUv(const Eigen::Vector2d& p) const {
-    return {(p.x() + x0 + 0.5) / imageWidth, (p.y() + y0 + 0.5) / imageHeight};
-  }
-  /// True if grid texel (x, y) lies inside the image.
-  bool inImage(int x, int y) const {
-    const int i = x + x0, j = y + y0;
-    return i >= 0 && j >= 0 && i < imageWidth && j < imageHeight;
-  }
-};
-
-/// Builds the texel grid exactly (no jitter): a cell is covered when a UV triangle of positive
-/// area overlaps its interior; texels, classes and chart ownership follow DESIGN.md §2.
+/// Builds the texel grid of a width x height texture exactly (no jitter): the grid spans every
+/// texel a UV triangle can touch, a cell is covered when a UV triangle of positive area overlaps
+/// its interior, and classifyLattice turns that coverage into texel classes and unknowns.
 TexelGrid buildTexelGrid(const TexturedMesh& mesh, const Atlas& atlas, int width, int height);
 
 }  // namespace texgrad

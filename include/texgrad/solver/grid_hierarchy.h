@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "texgrad/atlas/texel_grid.h"
+#include "texgrad/lattice/texel_grid.h"
 
 namespace texgrad {
 

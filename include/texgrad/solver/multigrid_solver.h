@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "texgrad/atlas/texel_grid.h"
+#include "texgrad/lattice/texel_grid.h"
 #include "texgrad/solver/grid_hierarchy.h"
 #include "texgrad/solver/solve_report.h"
 #include "texgrad/solver/sparse_sum.h"
