@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "texgrad/atlas/texel_grid.h"
+#include "texgrad/lattice/texel_grid.h"
 
 namespace texgrad::test {
 
@@ -28,43 +28,27 @@ struct SyntheticProblem {
   Eigen::SparseMatrix<double> system(double alpha) const { return alpha * mass + stiffness; }
 };
 
-/// Builds texel classes from cell coverage (DESIGN.md §2): active if a footprint cell is covered,
-/// interior if all four footprint cells are Full with the same chart.
+/// Covered area standing for a Partial cell: any area strictly between 0 and 1.
+constexpr double kPartialCellArea = 0.5;
+
+/// Builds an nx x ny grid whose cell (a, b) has cellAt(a, b)'s coverage and chart, classified by
+/// the library's rule (classifyLattice), so solver tests see the texel classes and numbering
+/// that buildTexelGrid gives an atlas with the same coverage.
 inline TexelGrid makeGrid(int nx, int ny, const std::function<CellInfo(int, int)>& cellAt) {
   TexelGrid g;
   g.imageWidth = g.nx = nx;
   g.imageHeight = g.ny = ny;
-  g.cellCoverage.resize(static_cast<size_t>((nx + 1) * (ny + 1)));
-  g.cellChart.resize(g.cellCoverage.size());
+  CellCover cover(g.cellCount());
   for (int b = -1; b < ny; ++b)
     for (int a = -1; a < nx; ++a) {
       const CellInfo c = cellAt(a, b);
-      g.cellCoverage[static_cast<size_t>(g.cellIndex(a, b))] = c.coverage;
-      g.cellChart[static_cast<size_t>(g.cellIndex(a, b))] = c.chart;
+      const auto k = static_cast<size_t>(g.cellIndex(a, b));
+      cover.area[k] = c.coverage == CellCoverage::Full      ? 1.0
+                      : c.coverage == CellCoverage::Partial ? kPartialCellArea
+                                                            : 0.0;
+      cover.chart[k] = c.coverage == CellCoverage::Empty ? -1 : c.chart;
     }
-  const size_t n = static_cast<size_t>(nx * ny);
-  g.texelClass.assign(n, TexelClass::Inactive);
-  g.texelChart.assign(n, -1);
-  g.unknownOfTexel.assign(n, -1);
-  for (int y = 0; y < ny; ++y)
-    for (int x = 0; x < nx; ++x) {
-      int full = 0, minChart = 1 << 30, maxChart = -1;
-      for (int b = y - 1; b <= y; ++b)
-        for (int a = x - 1; a <= x; ++a) {
-          const size_t ci = static_cast<size_t>(g.cellIndex(a, b));
-          if (g.cellCoverage[ci] == CellCoverage::Empty) continue;
-          full += g.cellCoverage[ci] == CellCoverage::Full;
-          minChart = std::min(minChart, g.cellChart[ci]);
-          maxChart = std::max(maxChart, g.cellChart[ci]);
-        }
-      if (maxChart < 0) continue;
-      const size_t t = static_cast<size_t>(g.texelIndex(x, y));
-      g.texelChart[t] = minChart;
-      g.texelClass[t] = (full == 4 && minChart == maxChart) ? TexelClass::Interior : TexelClass::Boundary;
-      if (minChart != maxChart) g.multiChartTexels.push_back(static_cast<int32_t>(t));
-      g.unknownOfTexel[t] = g.unknownCount();
-      g.texelOfUnknown.push_back(static_cast<int32_t>(t));
-    }
+  classifyLattice(g, std::move(cover));
   return g;
 }
 
