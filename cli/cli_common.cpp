@@ -10,11 +10,12 @@
 #include <iostream>
 #include <new>
 #include <optional>
+#include <utility>
 
 #include "texgrad/core/error.h"
-#include "texgrad/io/gltf_writer.h"
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_reader.h"
+#include "texgrad/io/mesh_texture.h"
 #include "texgrad/io/procedural.h"
 
 namespace texgrad::cli {
@@ -55,10 +56,7 @@ TexturedMesh loadMesh(const std::string& spec, double weldTolerance) {
 Image loadTexture(const TexturedMesh& mesh, const std::string& meshSpec,
                   const std::string& explicitPath, const std::string& slot) {
   if (!explicitPath.empty()) return readImage(explicitPath);
-  if (const TextureRef* ref = mesh.texture(slot)) {
-    if (!ref->path.empty()) return readImage(ref->path);
-    return readImageFromMemory(ref->embedded, meshSpec + " (embedded " + slot + " texture)");
-  }
+  if (std::optional<Image> texture = readMeshTexture(mesh, slot)) return std::move(*texture);
   if (isBuiltin(meshSpec)) return procedural::sampleTexture(kSampleTextureSize, kSampleTextureSize);
   throw InvalidInputError(meshSpec + " references no " + slot +
                           " texture; pass the texture file as an argument");
@@ -285,19 +283,12 @@ void writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const 
                         const std::string& slot, const std::string& bitDepth) {
   std::optional<PixelFormat> format;
   if (!bitDepth.empty()) format = parsePixelFormat(bitDepth);
-  std::string ext = std::filesystem::path(out).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (ext != ".gltf" && ext != ".glb") {
-    writeImage(out, image, format);
-    return;
-  }
-  std::string source = mesh.sourcePath.extension().string();
-  for (char& c : source) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (source != ".gltf" && source != ".glb")
+  // writeMeshTexture refuses this too; the CLI's message names the flag.
+  if (isGltfPath(out) && !isGltfPath(mesh.sourcePath))
     throw InvalidInputError("--out " + out +
                             " asks for a glTF asset, but the mesh was not read "
                             "from glTF; write an image (.png, .exr, ...) instead");
-  writeGltfWithTexture(mesh.sourcePath, out, slot, image, format);
+  writeMeshTexture(out, mesh, image, slot, format);
 }
 
 }  // namespace texgrad::cli

@@ -22,7 +22,7 @@ TexturedMesh loadMesh(const std::string& spec, double weldTolerance);
 /// Names accepted after `builtin:` (sample, sphere, cube, cylinder, square, two-charts).
 std::string builtinMeshNames();
 
-/// Texture for a mesh: the explicit path if given, else the mesh's slot texture (file or embedded),
+/// Texture for a mesh: the explicit path if given, else the mesh's slot texture (readMeshTexture),
 /// else the built-in sample texture for `builtin:` meshes; throws InvalidInputError if none.
 Image loadTexture(const TexturedMesh& mesh, const std::string& meshSpec,
                   const std::string& explicitPath, const std::string& slot = "baseColor");
@@ -95,8 +95,8 @@ class StageTimer {
 /// JSON of a solve report: iterations, converged, residuals, RMS changes, phase times.
 nlohmann::json toJson(const SolveReport& report);
 
-/// Writes a processed texture: an image file, or — when `out` ends in .gltf/.glb — a copy of the
-/// mesh's glTF asset whose `slot` texture is the processed image. `bitDepth` as parsePixelFormat.
+/// Writes a processed texture with writeMeshTexture (an image file, or a copy of the mesh's glTF
+/// asset when `out` ends in .gltf/.glb); `bitDepth` as parsePixelFormat, empty: the image's.
 void writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const Image& image,
                         const std::string& slot, const std::string& bitDepth);
 

@@ -1,0 +1,31 @@
+// A mesh's own textures: reading the image in one of its material slots, and writing a processed
+// image back as an image file or into a copy of the glTF asset the mesh came from.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "texgrad/io/image.h"
+#include "texgrad/io/textured_mesh.h"
+
+namespace texgrad {
+
+/// The image of the mesh's `slot` texture ("baseColor", "normal", ...), read from the file the
+/// mesh names or decoded from the bytes embedded in its asset; nullopt if it names no such
+/// texture. Throws IoError / InvalidInputError naming the file if the image cannot be read.
+std::optional<Image> readMeshTexture(const TexturedMesh& mesh,
+                                     const std::string& slot = "baseColor");
+
+/// True if `path` names a glTF asset (extension .gltf or .glb, in any case).
+bool isGltfPath(const std::filesystem::path& path);
+
+/// Writes a processed texture of `mesh` to `out`: an image file (writeImage), or, when `out` is
+/// a glTF path, a copy of the mesh's source asset whose `slot` texture is `image`
+/// (writeGltfWithTexture). `format` defaults to image.format. Throws InvalidInputError if a glTF
+/// output is asked for a mesh that was not read from glTF.
+void writeMeshTexture(const std::filesystem::path& out, const TexturedMesh& mesh,
+                      const Image& image, const std::string& slot = "baseColor",
+                      std::optional<PixelFormat> format = std::nullopt);
+
+}  // namespace texgrad

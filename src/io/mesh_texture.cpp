@@ -1,0 +1,43 @@
+// readMeshTexture / writeMeshTexture: the texture slot of a mesh, on disk or embedded, and the
+// choice between an image file and glTF write-back for the processed result.
+#include "texgrad/io/mesh_texture.h"
+
+#include <algorithm>
+#include <cctype>
+
+#include "texgrad/core/error.h"
+#include "texgrad/io/gltf_writer.h"
+#include "texgrad/io/image_io.h"
+
+namespace texgrad {
+
+std::optional<Image> readMeshTexture(const TexturedMesh& mesh, const std::string& slot) {
+  const TextureRef* ref = mesh.texture(slot);
+  if (ref == nullptr) return std::nullopt;
+  if (!ref->path.empty()) return readImage(ref->path);
+  return readImageFromMemory(ref->embedded,
+                             mesh.sourcePath.string() + " (embedded " + slot + " texture)");
+}
+
+bool isGltfPath(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext == ".gltf" || ext == ".glb";
+}
+
+void writeMeshTexture(const std::filesystem::path& out, const TexturedMesh& mesh,
+                      const Image& image, const std::string& slot,
+                      std::optional<PixelFormat> format) {
+  if (!isGltfPath(out)) {
+    writeImage(out, image, format);
+    return;
+  }
+  if (!isGltfPath(mesh.sourcePath))
+    throw InvalidInputError(out.string() +
+                            " asks for a glTF asset, but the mesh was not read from glTF; write "
+                            "an image (.png, .exr, ...) instead");
+  writeGltfWithTexture(mesh.sourcePath, out, slot, image, format);
+}
+
+}  // namespace texgrad
