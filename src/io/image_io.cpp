@@ -1,5 +1,6 @@
-// Image file I/O through OpenImageIO: the one place where file rows (top first) become texel rows
-// (bottom first, DESIGN.md §2), and where content is checked against the file's extension.
+// Image file I/O through OpenImageIO: where file rows (top first) become texel rows (bottom first)
+// and back (docs/architecture.md, Conventions), and where content is checked against the file's
+// extension.
 #include "texgrad/io/image_io.h"
 
 #include <OpenImageIO/filesystem.h>

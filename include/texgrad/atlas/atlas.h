@@ -16,7 +16,7 @@ struct FaceEdge {
   friend bool operator==(const FaceEdge&, const FaceEdge&) = default;
 };
 
-/// Two UV boundary edges that are the same 3-D edge (DESIGN.md §2, paper §3.1).
+/// Two UV boundary edges that are the same 3-D edge (paper §3.1).
 ///
 /// Seam equivalence: the point at parameter s along `a` (from its start corner to its end corner,
 /// in UV) is the same surface point as the point at parameter s along `b` when `sameDirection`

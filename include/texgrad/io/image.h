@@ -13,7 +13,7 @@ enum class PixelFormat : uint8_t { UInt8, UInt16, Half, Float };
 /// A W x H image with 1-4 channels of float values (integer formats normalised to [0, 1]).
 ///
 /// Rows are in *texel order*: row j holds texels whose centres are at v = (j + 0.5) / H, so row 0
-/// is the bottom of the picture. readImage/writeImage do the one flip (DESIGN.md §2).
+/// is the bottom of the picture; readImage/writeImage flip file rows (docs/architecture.md).
 struct Image {
   int width = 0;
   int height = 0;

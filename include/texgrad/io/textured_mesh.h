@@ -24,8 +24,8 @@ struct TextureRef {
 
 /// Triangle mesh with per-corner texture coordinates (OBJ-style separate index spaces).
 ///
-/// positions are welded 3-D vertices (seams are recovered from them); uvs are texture
-/// coordinates with v measured upward (OBJ/glTF-after-flip convention, DESIGN.md §2).
+/// positions are welded 3-D vertices (seams are recovered from them); uvs are texture coordinates
+/// with v upward (OBJ's convention; the glTF reader flips v: docs/architecture.md, Conventions).
 /// triangles[f] and uvTriangles[f] index the corners of face f in the same order.
 struct TexturedMesh {
   std::vector<Eigen::Vector3d> positions;  ///< 3-D vertex positions (welded)
