@@ -18,7 +18,9 @@
 namespace texgrad {
 namespace {
 
-/// Iterations of CG per SolverSettings::cycles is 20, so this allows 600 CG iterations.
+/// Most CG iterations per LIC solve (SolverSettings::maxIterations).
+constexpr int kLicIterations = 600;
+/// V-cycles per LIC solve when the multigrid kind is chosen instead (SolverSettings::cycles).
 constexpr int kLicCycles = 30;
 /// Relative residual LIC solves aim for with the iterative solvers.
 constexpr double kLicTolerance = 1e-8;
@@ -93,6 +95,7 @@ SolverSettings defaultLicSolver() {
   SolverSettings settings;
   settings.kind = SolverKind::MultigridCg;
   settings.cycles = kLicCycles;
+  settings.maxIterations = kLicIterations;
   settings.tolerance = kLicTolerance;
   return settings;
 }
