@@ -10,6 +10,7 @@
 #include <iostream>
 #include <new>
 #include <optional>
+#include <sstream>
 #include <utility>
 
 #include "texgrad/core/error.h"
@@ -175,10 +176,9 @@ void addWeldToleranceOption(CLI::App* cmd, double& tolerance) {
 SolverSettings SolverArgs::settings() const {
   SolverSettings s;
   s.kind = parseSolverKind(kind);
-  if (precision != "float" && precision != "double")
-    throw InvalidInputError("--precision must be float or double, got '" + precision + "'");
-  s.singlePrecision = precision == "float";
+  s.singlePrecision = parseSinglePrecision(precision);
   s.cycles = cycles;
+  s.maxIterations = maxIterations;
   s.tolerance = tolerance;
   s.multigrid.levels = levels;
   s.multigrid.sweeps = sweeps;
@@ -189,47 +189,102 @@ SolverSettings SolverArgs::settings() const {
   return s;
 }
 
+namespace {
+
+/// A CLI11 check that asks the library: `set` stores the flag's value in default settings (or
+/// parses it), and the library's InvalidInputError message becomes CLI11's validation error.
+/// Text that is not a `Value` passes here, and CLI11's conversion refuses it.
+template <typename Value>
+CLI::Validator libraryCheck(const std::string& range,
+                            const std::function<void(SolverSettings&, Value)>& set) {
+  return CLI::Validator(
+      [set](std::string& text) -> std::string {
+        Value value{};
+        if (!CLI::detail::lexical_cast(text, value)) return {};
+        SolverSettings settings;
+        try {
+          set(settings, value);
+          settings.validate();
+        } catch (const InvalidInputError& e) {
+          return e.what();
+        }
+        return {};
+      },
+      range);
+}
+
+/// A number as --help quotes it (1e-08, 0.5), not std::to_string's six decimals.
+std::string numberText(double value) {
+  std::ostringstream text;
+  text << value;
+  return text.str();
+}
+
+std::string rangeText(int low, int high) {
+  return std::to_string(low) + " to " + std::to_string(high);
+}
+
+}  // namespace
+
 void addSolverOptions(CLI::App* cmd, SolverArgs& args, const SolverSettings& defaults) {
+  using Settings = SolverSettings;
+  using Multigrid = MultigridOptions;
   cmd->add_option("--solver", args.kind,
                   "multigrid (V-cycles, paper Sec. 6), cg (conjugate gradients preconditioned by "
                   "one V-cycle per iteration: converges where plain V-cycles are slow) or direct "
                   "(CHOLMOD: exact, slower, more memory)")
       ->default_val(toString(defaults.kind))
-      ->check(CLI::IsMember({"multigrid", "cg", "direct"}));
+      ->check(libraryCheck<std::string>("{multigrid,cg,direct}", [](Settings& s, std::string v) {
+        s.kind = parseSolverKind(v);
+      }));
   cmd->add_option("--cycles", args.cycles,
-                  "V-cycles for multigrid, or 1/20 of the most CG iterations (more = closer to "
-                  "the exact solution)")
+                  "multigrid: V-cycles per solve (more = closer to the exact solution); not used "
+                  "by cg (see --max-iterations) or direct")
       ->default_val(defaults.cycles)
-      ->check(CLI::Range(1, 10000));
+      ->check(libraryCheck<int>(">= 1", [](Settings& s, int v) { s.cycles = v; }));
+  cmd->add_option("--max-iterations", args.maxIterations,
+                  "cg: most CG iterations per solve, one V-cycle each (it stops earlier at "
+                  "--tolerance); not used by multigrid or direct")
+      ->default_val(defaults.maxIterations)
+      ->check(libraryCheck<int>(">= 1", [](Settings& s, int v) { s.maxIterations = v; }));
   cmd->add_option("--tolerance", args.tolerance,
-                  "Stop once the relative residual |b - A x| / |b| is below this (0: run every "
-                  "cycle)")
+                  "Stop once the relative residual |b - A x| / |b| is at most this (0 to 1). 0 = "
+                  "the solver's default: multigrid runs every --cycles, cg stops at " +
+                      numberText(SolverSettings::kDefaultCgTolerance) +
+                      "; direct is exact and ignores it")
       ->default_val(defaults.tolerance)
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(libraryCheck<double>("0 to 1", [](Settings& s, double v) { s.tolerance = v; }));
   cmd->add_option("--levels", args.levels, "Multigrid coarsening levels (paper default 4)")
-      ->default_val(4)
-      ->check(CLI::Range(0, 16));
+      ->default_val(defaults.multigrid.levels)
+      ->check(libraryCheck<int>(rangeText(0, Multigrid::kMaxLevels),
+                                [](Settings& s, int v) { s.multigrid.levels = v; }));
   cmd->add_option("--sweeps", args.sweeps, "Gauss-Seidel sweeps per level (paper default 3)")
-      ->default_val(3)
-      ->check(CLI::Range(1, 100));
+      ->default_val(defaults.multigrid.sweeps)
+      ->check(libraryCheck<int>(rangeText(1, Multigrid::kMaxSweeps),
+                                [](Settings& s, int v) { s.multigrid.sweeps = v; }));
   cmd->add_option("--line-ratio", args.lineRatio,
                   "Also relax texels by lines along a grid axis when their stencil couples more "
                   "than this many times as strongly along it as across (stretched charts); 0 = off")
-      ->default_val(MultigridOptions{}.lineRatio)
-      ->check(CLI::NonNegativeNumber);
+      ->default_val(defaults.multigrid.lineRatio)
+      ->check(libraryCheck<double>("0 or >= " + numberText(Multigrid::kMinLineRatio),
+                                   [](Settings& s, double v) { s.multigrid.lineRatio = v; }));
   cmd->add_option("--weak-row-reach", args.weakRowReach,
                   "Solve texels within this many texels of a barely covered boundary texel "
                   "directly with the boundary; 0 = off (the paper's split)")
-      ->default_val(MultigridOptions{}.weakRowReach)
-      ->check(CLI::Range(0, 8));
+      ->default_val(defaults.multigrid.weakRowReach)
+      ->check(libraryCheck<int>(rangeText(0, Multigrid::kMaxWeakRowReach),
+                                [](Settings& s, int v) { s.multigrid.weakRowReach = v; }));
   cmd->add_option("--precision", args.precision,
                   "float or double V-cycles (factorisations are always double; float solves "
                   "change to double cycles if a float cycle diverges)")
-      ->default_val("float")
-      ->check(CLI::IsMember({"float", "double"}));
+      ->default_val(defaults.singlePrecision ? "float" : "double")
+      ->check(libraryCheck<std::string>("{float,double}", [](Settings& s, std::string v) {
+        s.singlePrecision = parseSinglePrecision(v);
+      }));
   cmd->add_option("--threads", args.threads, "Worker threads; 0 = all cores")
-      ->default_val(0)
-      ->check(CLI::Range(0, 1024));
+      ->default_val(defaults.multigrid.threads)
+      ->check(libraryCheck<int>(rangeText(0, Multigrid::kMaxThreads),
+                                [](Settings& s, int v) { s.multigrid.threads = v; }));
 }
 
 void addReportOptions(CLI::App* cmd, ReportArgs& args) {

@@ -55,6 +55,7 @@ struct SolverArgs {
   std::string kind = "multigrid";
   std::string precision = "float";
   int cycles = 6;
+  int maxIterations = SolverSettings{}.maxIterations;
   double tolerance = 0.0;
   int levels = 4;
   int sweeps = 3;
@@ -64,7 +65,10 @@ struct SolverArgs {
   /// The settings these flags describe; throws InvalidInputError on a bad value.
   SolverSettings settings() const;
 };
-/// Registers the solver flags on `cmd` with the command's defaults (kind, cycles, tolerance).
+/// Registers the solver flags on `cmd` with the command's defaults (kind, cycles, iterations,
+/// tolerance). Each flag's value is checked by the library (parseSolverKind,
+/// parseSinglePrecision, SolverSettings::validate), so the CLI refuses exactly what the library
+/// refuses, with its message.
 void addSolverOptions(CLI::App* cmd, SolverArgs& args, const SolverSettings& defaults);
 
 /// Output flags shared by processing commands.

@@ -59,7 +59,8 @@ void runLic(LicArgs args) {
     std::cerr << "texgrad: warning: an LIC solve stopped before reaching its tolerance "
                  "(diffusion residual "
               << result.report.diffusion.residuals.back()
-              << "); raise --cycles or use --solver direct\n";
+              << "); raise --max-iterations (cg) or --cycles (multigrid), or use --solver "
+                 "direct\n";
   if (args.report.timings) timer.print();
   if (args.report.json)
     printJson({{"command", "lic"},

@@ -1,5 +1,6 @@
 // Entry point of the `texgrad` command: registers subcommands; errors become one clear line.
 #include <CLI/CLI.hpp>
+#include <cstddef>
 #include <iostream>
 
 #include "commands.h"
@@ -8,7 +9,6 @@
 int texgrad::cli::exitStatus = 0;
 
 int main(int argc, char** argv) {
-  texgrad::reuseFreedMemory();  // large texel buffers: reuse the heap, no fresh page faults
   CLI::App app{
       "texgrad: gradient-domain processing of surface signals inside a texture atlas.\n"
       "Meshes: .obj (+.mtl), .ply, .gltf, .glb, or builtin:NAME for a procedural mesh."};
@@ -31,6 +31,14 @@ int main(int argc, char** argv) {
   texgrad::cli::addReactCommand(app);
   texgrad::cli::addGeodesicCommand(app);
   texgrad::cli::addViewCommand(app);
+  // One-shot commands allocate and free large texel buffers many times, then exit: they opt into
+  // keeping freed memory for reuse (no fresh page faults; include/texgrad/core/heap_reuse.h).
+  // `view` runs until stopped, mostly idle between edits: with glibc's defaults the memory its
+  // set-up frees (assembly and factorisation scratch) goes back to the system instead of staying
+  // resident for the whole session.
+  for (CLI::App* command : app.get_subcommands({}))
+    if (command->get_name() != "view")
+      command->preparse_callback([](std::size_t) { texgrad::reuseFreedMemory(); });
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -18,7 +18,9 @@
 namespace texgrad {
 namespace {
 
-/// Iterations of CG per SolverSettings::cycles is 20, so this allows 600 CG iterations.
+/// Most CG iterations per LIC solve (SolverSettings::maxIterations).
+constexpr int kLicIterations = 600;
+/// V-cycles per LIC solve when the multigrid kind is chosen instead (SolverSettings::cycles).
 constexpr int kLicCycles = 30;
 /// Relative residual LIC solves aim for with the iterative solvers.
 constexpr double kLicTolerance = 1e-8;
@@ -93,6 +95,7 @@ SolverSettings defaultLicSolver() {
   SolverSettings settings;
   settings.kind = SolverKind::MultigridCg;
   settings.cycles = kLicCycles;
+  settings.maxIterations = kLicIterations;
   settings.tolerance = kLicTolerance;
   return settings;
 }
@@ -172,7 +175,7 @@ Eigen::MatrixXd licNoise(const TexelGrid& grid, int channels, uint64_t seed) {
 }
 
 struct LineIntegralConvolution::Impl {
-  TexelDomain& domain;
+  const TexelDomain& domain;
   LicOptions options;
   std::vector<Eigen::Matrix2d> metric;
   SparseMatrixd massH;      ///< M_h
@@ -182,40 +185,34 @@ struct LineIntegralConvolution::Impl {
   std::optional<SystemSolver> sharpening;
   LicReport setup;
 
-  Impl(TexelDomain& d, const LicOptions& o)
+  Impl(const TexelDomain& d, const LicOptions& o)
       : domain(d), options(o), diffusion(d.grid(), o.solver) {}
 
   bool sharpens() const { return options.sharpenBeta != 1.0; }
 };
 
-LineIntegralConvolution::LineIntegralConvolution(TexelDomain& domain,
+LineIntegralConvolution::LineIntegralConvolution(const TexelDomain& domain,
                                                  const std::vector<Eigen::Vector2d>& fieldTexel,
                                                  const LicOptions& options) {
   options.validate();
   const auto start = std::chrono::steady_clock::now();
   impl_ = std::make_unique<Impl>(domain, options);
   Impl& s = *impl_;
-  TexelOperators& ops = domain.operators();
-  const std::vector<Eigen::Matrix2d> g = ops.metric();
+  const TexelOperators& ops = domain.operators();
   s.mass = ops.mass();
   s.stiffness = ops.stiffness();
-  s.metric = anisotropicMetric(domain.mesh(), domain.grid(), g, fieldTexel, options.epsilon);
+  s.metric =
+      anisotropicMetric(domain.mesh(), domain.grid(), ops.metric(), fieldTexel, options.epsilon);
   for (size_t f = 0; f < fieldTexel.size(); ++f)
     if (fem::gridArea(domain.mesh(), domain.grid(), static_cast<int>(f)) != 0.0 &&
         fieldTexel[f].isZero(0.0))
       ++s.setup.zeroFieldFaces;
 
-  SparseMatrixd system;
-  try {
-    ops.setMetric(s.metric);
-    s.massH = ops.mass();
-    system = options.alpha * s.massH + ops.stiffness();
-    pinNegligibleTexels(s.massH, options.alpha, system);
-  } catch (...) {
-    ops.setMetric(g);
-    throw;
-  }
-  ops.setMetric(g);
+  // M_h and S_h on the domain's pattern; the domain's own M and S keep the immersion metric.
+  MassStiffness h = ops.assembledFor(s.metric);
+  s.massH.swap(h.mass);  // Eigen 3.4 sparse matrices copy on assignment
+  SparseMatrixd system = options.alpha * s.massH + h.stiffness;
+  pinNegligibleTexels(s.massH, options.alpha, system);
 
   const auto solverStart = std::chrono::steady_clock::now();
   s.diffusion.initAndUpdate(std::move(system));
@@ -279,7 +276,7 @@ Eigen::MatrixXd licContrast(const Eigen::MatrixXd& values, const Eigen::VectorXd
   return out.cwiseMax(0.0).cwiseMin(1.0);
 }
 
-LicResult lineIntegralConvolution(TexelDomain& domain,
+LicResult lineIntegralConvolution(const TexelDomain& domain,
                                   const std::vector<Eigen::Vector2d>& fieldTexel,
                                   const LicOptions& options, const ProgressCallback& progress) {
   reportProgress(progress, "lic setup", 0.0);

@@ -8,6 +8,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <sstream>
+#include <string>
 #include <utility>
 
 #include "texgrad/core/error.h"
@@ -83,6 +85,13 @@ double addInPlace(Eigen::MatrixXd& x, const Eigen::MatrixXd& z) {
   });
 }
 
+/// A number as an error message quotes it: %g (0.5, 1e-08), not std::to_string's six decimals.
+std::string formatNumber(double value) {
+  std::ostringstream text;
+  text << value;
+  return text.str();
+}
+
 bool sameValues(const Eigen::MatrixXd& u, const Eigen::MatrixXd& v) {
   return sumOverRows(u.rows(), [&](Eigen::Index begin, Eigen::Index end) {
            for (Eigen::Index c = 0; c < u.cols(); ++c)
@@ -113,11 +122,27 @@ std::string toString(SolverKind kind) {
   return "?";
 }
 
+bool parseSinglePrecision(const std::string& text) {
+  if (text == "float") return true;
+  if (text == "double") return false;
+  throw InvalidInputError("unknown precision '" + text + "'; use float or double");
+}
+
+double SolverSettings::effectiveTolerance() const {
+  if (tolerance == 0.0 && kind == SolverKind::MultigridCg) return kDefaultCgTolerance;
+  return tolerance;
+}
+
 void SolverSettings::validate() const {
   multigrid.validate();
   if (cycles < 1)
-    throw InvalidInputError("cycles must be at least 1, got " + std::to_string(cycles));
-  if (!(tolerance >= 0.0)) throw InvalidInputError("solver tolerance must be >= 0");
+    throw InvalidInputError("solver cycles is " + std::to_string(cycles) + "; expected >= 1");
+  if (maxIterations < 1)
+    throw InvalidInputError("solver maxIterations is " + std::to_string(maxIterations) +
+                            "; expected >= 1");
+  if (!(tolerance >= 0.0 && tolerance <= 1.0))
+    throw InvalidInputError("solver tolerance is " + formatNumber(tolerance) +
+                            "; expected 0 to 1 (a relative residual; 0 = the kind's default)");
 }
 
 struct SystemSolver::Impl {
@@ -274,7 +299,7 @@ struct SystemSolver::Impl {
       case SolverKind::MultigridCg: {
         CgOptions options;
         options.maxIterations = count;
-        options.tolerance = settings.tolerance > 0 ? settings.tolerance : 1e-8;
+        options.tolerance = settings.effectiveTolerance();
         return visitMultigrid([&](auto& solver) {
           return conjugateGradient(a, b, x, multigridPreconditioner(solver), options);
         });
@@ -364,8 +389,8 @@ void SystemSolver::initAndUpdate(Eigen::SparseMatrix<double>&& a) {
 }
 
 SolveReport SystemSolver::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
-  const int count = impl_->settings.kind == SolverKind::MultigridCg ? 20 * impl_->settings.cycles
-                                                                    : impl_->settings.cycles;
+  const SolverSettings& s = impl_->settings;
+  const int count = s.kind == SolverKind::MultigridCg ? s.maxIterations : s.cycles;
   return impl_->run(b, x, count);
 }
 

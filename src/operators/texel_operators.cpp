@@ -248,14 +248,15 @@ void scatter(const SparseMatrixd& m, double* values, const int32_t* texels, int 
 
 }  // namespace
 
-void TexelOperators::Impl::assemble(const double* beta, double* massOut, double* stiffnessOut) {
+void TexelOperators::Impl::assemble(const std::vector<FaceFactors>& faceFactors, const double* beta,
+                                    double* massOut, double* stiffnessOut) const {
   const TexelGrid& grid = basis.grid();
   for (double* out : {massOut, stiffnessOut})
     if (out) std::fill_n(out, mass.nonZeros(), 0.0);
   static const detail::BilinearIntegrals unit = detail::bilinearIntegrals(detail::unitCellMoments());
   auto cellBeta = [&](int a, int b) { return beta ? beta[grid.cellIndex(a, b)] : 1.0; };
   auto plain = [&](int face, int a, int b, const detail::BilinearIntegrals& in) {
-    const FaceFactors& f = factors[face];
+    const FaceFactors& f = faceFactors[face];
     const auto texels = basis.cellTexels(a, b);
     if (massOut) scatter(mass, massOut, texels.data(), 4, in.mass, f.mass);
     if (stiffnessOut) {
@@ -276,7 +277,7 @@ void TexelOperators::Impl::assemble(const double* beta, double* massOut, double*
   std::vector<double> combined;
   for (const SeamPiece& sp : seam) {
     const int k = sp.texelEnd - sp.texelBegin;
-    const FaceFactors& f = factors[sp.face];
+    const FaceFactors& f = faceFactors[sp.face];
     const double* v = seamValues.data() + sp.valueBegin;
     const int packed = k * (k + 1) / 2;
     if (massOut)
@@ -326,27 +327,41 @@ void TexelOperators::Impl::requirePieces(const char* caller) const {
 
 TexelOperators::~TexelOperators() = default;
 
-void TexelOperators::setMetric(std::vector<Eigen::Matrix2d> metric) {
-  impl_->requirePieces("setMetric");
-  if (static_cast<int>(metric.size()) != impl_->basis.faceCount())
-    throw InvalidInputError("setMetric: expected one 2x2 metric per face (" +
-                            std::to_string(impl_->basis.faceCount()) + "), got " +
-                            std::to_string(metric.size()));
-  impl_->factors.assign(metric.size(), {});
-  for (size_t f = 0; f < metric.size(); ++f) {
-    if (!impl_->basis.faceValid(static_cast<int>(f))) continue;
-    const Eigen::Matrix2d& g = metric[f];
+std::vector<TexelOperators::Impl::FaceFactors> TexelOperators::Impl::factorsOf(
+    const std::vector<Eigen::Matrix2d>& faceMetric, const char* caller) const {
+  if (static_cast<int>(faceMetric.size()) != basis.faceCount())
+    throw InvalidInputError(std::string(caller) + ": expected one 2x2 metric per face (" +
+                            std::to_string(basis.faceCount()) + "), got " +
+                            std::to_string(faceMetric.size()));
+  std::vector<FaceFactors> out(faceMetric.size());
+  for (size_t f = 0; f < faceMetric.size(); ++f) {
+    if (!basis.faceValid(static_cast<int>(f))) continue;
+    const Eigen::Matrix2d& g = faceMetric[f];
     const double det = g.determinant();
     if (!(det > 0.0) || !(g(0, 0) > 0.0) || !std::isfinite(det) || g(0, 1) != g(1, 0))
-      throw InvalidInputError("setMetric: the metric of face " + std::to_string(f) +
+      throw InvalidInputError(std::string(caller) + ": the metric of face " + std::to_string(f) +
                               " is not symmetric positive definite");
     const double root = std::sqrt(det);
-    impl_->factors[f] = {root, root * g(1, 1) / det, -root * g(0, 1) / det, root * g(0, 0) / det};
+    out[f] = {root, root * g(1, 1) / det, -root * g(0, 1) / det, root * g(0, 0) / det};
   }
+  return out;
+}
+
+void TexelOperators::setMetric(std::vector<Eigen::Matrix2d> metric) {
+  impl_->requirePieces("setMetric");
+  impl_->factors = impl_->factorsOf(metric, "setMetric");
   impl_->metric = std::move(metric);
   impl_->stiffnessValues.resize(static_cast<size_t>(impl_->mass.nonZeros()));
-  impl_->assemble(nullptr, impl_->mass.valuePtr(), impl_->stiffnessValues.data());
+  impl_->assemble(impl_->factors, nullptr, impl_->mass.valuePtr(), impl_->stiffnessValues.data());
   impl_->buildSeamContinuity();
+}
+
+MassStiffness TexelOperators::assembledFor(const std::vector<Eigen::Matrix2d>& metric) const {
+  impl_->requirePieces("assembledFor");
+  const std::vector<Impl::FaceFactors> faceFactors = impl_->factorsOf(metric, "assembledFor");
+  MassStiffness out{impl_->mass, impl_->mass};  // the shared pattern; assemble overwrites values
+  impl_->assemble(faceFactors, nullptr, out.mass.valuePtr(), out.stiffness.valuePtr());
+  return out;
 }
 
 const std::vector<Eigen::Matrix2d>& TexelOperators::metric() const { return impl_->metric; }
@@ -381,7 +396,7 @@ SparseMatrixd TexelOperators::modulatedStiffness(std::span<const double> betaPer
     throw InvalidInputError("modulatedStiffness: expected one beta per grid cell");
   impl_->requirePieces("modulatedStiffness");
   SparseMatrixd s = impl_->mass;  // the shared pattern; assemble overwrites the values
-  impl_->assemble(betaPerCell.data(), nullptr, s.valuePtr());
+  impl_->assemble(impl_->factors, betaPerCell.data(), nullptr, s.valuePtr());
   return s;
 }
 

@@ -40,9 +40,15 @@ struct TexelOperators::Impl {
   void buildPattern();
   /// C of the soft seam-continuity energy (zero for the seam-continuous basis).
   void buildSeamContinuity();
-  /// Sums the pieces into the values of M and S_beta (beta per cell, or 1 where null) on the
-  /// shared pattern (`mass`'s index arrays); either output may be null.
-  void assemble(const double* beta, double* massValues, double* stiffnessValues);
+  /// Metric factors of every face for a per-face metric; throws InvalidInputError, naming
+  /// `caller`, unless there is one SPD matrix per face.
+  std::vector<FaceFactors> factorsOf(const std::vector<Eigen::Matrix2d>& faceMetric,
+                                     const char* caller) const;
+  /// Sums the pieces into the values of M and S_beta (beta per cell, or 1 where null) for the
+  /// per-face `faceFactors` on the shared pattern (`mass`'s index arrays); either output may be
+  /// null. Changes no member, so the matrices of another metric can be assembled alongside.
+  void assemble(const std::vector<FaceFactors>& faceFactors, const double* beta, double* massValues,
+                double* stiffnessValues) const;
   /// Frees the piece integrals (OperatorOptions::keepPieceIntegrals = false).
   void releasePieces();
   /// Throws InvalidInputError naming `caller` if the piece integrals were freed.

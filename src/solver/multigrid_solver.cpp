@@ -36,6 +36,13 @@ std::vector<BoxRow> boxRowsOf(const GridLevel& level) {
 
 namespace {
 
+/// A number as an error message quotes it: %g (0.5, 1e-08), not std::to_string's six decimals.
+std::string formatNumber(double value) {
+  std::ostringstream text;
+  text << value;
+  return text.str();
+}
+
 /// Adds 1e-12 * max|diag| to every diagonal entry of a coarse Galerkin operator. P^T A P is
 /// singular when prolongation columns are dependent (tiny or thin charts: several coarse nodes
 /// whose only child is the same fine texel), and so are its boundary blocks; every null vector v
@@ -77,24 +84,24 @@ double sumOfSquares(const T* v, size_t n) {
 }  // namespace
 
 void MultigridOptions::validate() const {
-  if (levels < 0 || levels > 16)
-    throw InvalidInputError("multigrid levels is " + std::to_string(levels) +
-                            "; expected 0 to 16 (paper default 4)");
-  if (sweeps < 1 || sweeps > 100)
-    throw InvalidInputError("multigrid sweeps is " + std::to_string(sweeps) +
-                            "; expected 1 to 100 (paper default 3)");
+  if (levels < 0 || levels > kMaxLevels)
+    throw InvalidInputError("multigrid levels is " + std::to_string(levels) + "; expected 0 to " +
+                            std::to_string(kMaxLevels) + " (paper default 4)");
+  if (sweeps < 1 || sweeps > kMaxSweeps)
+    throw InvalidInputError("multigrid sweeps is " + std::to_string(sweeps) + "; expected 1 to " +
+                            std::to_string(kMaxSweeps) + " (paper default 3)");
   if (minCoarseUnknowns < 1)
     throw InvalidInputError("multigrid minCoarseUnknowns is " + std::to_string(minCoarseUnknowns) +
                             "; expected >= 1");
-  if (!(lineRatio == 0.0 || lineRatio >= 1.0) || !std::isfinite(lineRatio))
-    throw InvalidInputError("multigrid lineRatio is " + std::to_string(lineRatio) +
-                            "; expected 0 (off) or >= 1");
-  if (weakRowReach < 0 || weakRowReach > 8)
+  if (!(lineRatio == 0.0 || lineRatio >= kMinLineRatio) || !std::isfinite(lineRatio))
+    throw InvalidInputError("multigrid lineRatio is " + formatNumber(lineRatio) +
+                            "; expected 0 (off) or a number >= " + formatNumber(kMinLineRatio));
+  if (weakRowReach < 0 || weakRowReach > kMaxWeakRowReach)
     throw InvalidInputError("multigrid weakRowReach is " + std::to_string(weakRowReach) +
-                            "; expected 0 (off) to 8");
-  if (threads < 0)
+                            "; expected 0 (off) to " + std::to_string(kMaxWeakRowReach));
+  if (threads < 0 || threads > kMaxThreads)
     throw InvalidInputError("multigrid threads is " + std::to_string(threads) +
-                            "; expected >= 0 (0 = all cores)");
+                            "; expected 0 (all cores) to " + std::to_string(kMaxThreads));
 }
 
 void SolveControl::validate() const {

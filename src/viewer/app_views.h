@@ -15,7 +15,7 @@ std::unique_ptr<ViewerApp> makeGeodesicView(const TexelDomain& domain, const Ima
 std::unique_ptr<ViewerApp> makeReactView(const TexelDomain& domain, const Image& texture,
                                          const ViewerAppOptions& options);
 
-std::unique_ptr<ViewerApp> makeLicView(TexelDomain& domain, const ViewerAppOptions& options);
+std::unique_ptr<ViewerApp> makeLicView(const TexelDomain& domain, const ViewerAppOptions& options);
 
 std::unique_ptr<ViewerApp> makeStitchView(const TexelDomain& domain, const Image& composite,
                                           const ViewerAppOptions& options);

@@ -15,13 +15,13 @@ namespace {
 
 class LicView final : public ViewerApp {
  public:
-  LicView(TexelDomain& domain, const ViewerAppOptions& options)
+  LicView(const TexelDomain& domain, const ViewerAppOptions& options)
       : domain_(domain),
         options_(licOptions(options)),
         seed_(options.seed),
-        lic_(domain, fieldInTexelCoordinates(
-                         domain.mesh(), domain.grid(),
-                         curvatureField(domain.mesh(), CurvatureDirection::Major)),
+        lic_(domain,
+             fieldInTexelCoordinates(domain.mesh(), domain.grid(),
+                                     curvatureField(domain.mesh(), CurvatureDirection::Major)),
              options_),
         area_(domain.operators().mass() * Eigen::VectorXd::Ones(domain.unknowns())),
         image_(domain.grid().imageWidth, domain.grid().imageHeight, 1, PixelFormat::Float) {
@@ -78,7 +78,7 @@ class LicView final : public ViewerApp {
     scatterTexels(domain_.grid(), licNoise(domain_.grid(), options_.channels, seed_), image_);
   }
 
-  TexelDomain& domain_;
+  const TexelDomain& domain_;
   LicOptions options_;
   uint64_t seed_;
   LineIntegralConvolution lic_;
@@ -88,7 +88,7 @@ class LicView final : public ViewerApp {
 
 }  // namespace
 
-std::unique_ptr<ViewerApp> makeLicView(TexelDomain& domain, const ViewerAppOptions& options) {
+std::unique_ptr<ViewerApp> makeLicView(const TexelDomain& domain, const ViewerAppOptions& options) {
   return std::make_unique<LicView>(domain, options);
 }
 

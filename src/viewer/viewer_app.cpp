@@ -61,14 +61,6 @@ void checkAppInputs(const TexelDomain& domain, const Image& texture,
 
 }  // namespace
 
-std::unique_ptr<ViewerApp> makeViewerApp(ViewerAppKind kind, TexelDomain& domain,
-                                         const Image& texture, const ViewerAppOptions& options) {
-  if (kind != ViewerAppKind::Lic)
-    return makeViewerApp(kind, static_cast<const TexelDomain&>(domain), texture, options);
-  checkAppInputs(domain, texture, options);
-  return makeLicView(domain, options);
-}
-
 std::unique_ptr<ViewerApp> makeViewerApp(ViewerAppKind kind, const TexelDomain& domain,
                                          const Image& texture, const ViewerAppOptions& options) {
   checkAppInputs(domain, texture, options);
@@ -78,7 +70,7 @@ std::unique_ptr<ViewerApp> makeViewerApp(ViewerAppKind kind, const TexelDomain& 
     case ViewerAppKind::React: return makeReactView(domain, texture, options);
     case ViewerAppKind::Stitch: return makeStitchView(domain, texture, options);
     case ViewerAppKind::Lic:
-      throw InvalidInputError("the lic viewer app needs a non-const TexelDomain");
+      return makeLicView(domain, options);
   }
   throw InvalidInputError("unknown viewer app");
 }

@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <functional>
 #include <iostream>
+#include <string>
 
 #include "../solver/synthetic_problem.h"
 #include "texgrad/apps/system_solver.h"
@@ -50,6 +53,61 @@ TEST(SystemSolver, RefineConvergesToFloatAccuracyAndReportsTheTrueResidual) {
   }
   EXPECT_LT((x - truth).norm() / truth.norm(), 1e-5);
   EXPECT_TRUE(solver.settings().singlePrecision);  // no divergence here: the cycles stay float
+}
+
+TEST(SystemSolver, CgStopsAtItsOwnIterationLimitAndItsDocumentedTolerance) {
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  const Eigen::SparseMatrix<double> a = p.system(1e2);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 2, 7);
+  auto cg = [&](int cycles, int maxIterations, double tolerance) {
+    SolverSettings settings;
+    settings.kind = SolverKind::MultigridCg;
+    settings.cycles = cycles;
+    settings.maxIterations = maxIterations;
+    settings.tolerance = tolerance;
+    SystemSolver solver(p.grid, settings);
+    solver.initAndUpdate(a);
+    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 2);
+    return solver.solve(b, x);
+  };
+  // maxIterations bounds CG; cycles (V-cycles of the multigrid kind) plays no part.
+  for (int cycles : {1, 50}) {
+    const SolveReport capped = cg(cycles, 3, 1e-30);
+    EXPECT_EQ(capped.iterations, 3) << "cycles " << cycles;
+    EXPECT_FALSE(capped.converged);
+  }
+  // Tolerance 0 is the documented default: stop at the first residual <= 1e-8.
+  const SolveReport byDefault = cg(1, 200, 0.0);
+  ASSERT_TRUE(byDefault.converged);
+  ASSERT_GE(byDefault.residuals.size(), 2u);
+  EXPECT_LE(byDefault.residuals.back(), SolverSettings::kDefaultCgTolerance);
+  EXPECT_GT(byDefault.residuals[byDefault.residuals.size() - 2],
+            SolverSettings::kDefaultCgTolerance);
+  EXPECT_EQ(cg(1, 200, SolverSettings::kDefaultCgTolerance).iterations, byDefault.iterations);
+}
+
+TEST(SystemSolver, SettingsRefuseValuesOutsideTheirRanges) {
+  auto message = [](const std::function<void(SolverSettings&)>& set) {
+    SolverSettings settings;
+    set(settings);
+    try {
+      settings.validate();
+    } catch (const InvalidInputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(message([](SolverSettings& s) { s.maxIterations = 0; }),
+            "solver maxIterations is 0; expected >= 1");
+  EXPECT_NE(message([](SolverSettings& s) { s.tolerance = 1.5; }), "");
+  EXPECT_NE(message([](SolverSettings& s) { s.tolerance = std::nan(""); }), "");
+  EXPECT_EQ(message([](SolverSettings& s) { s.tolerance = 1.0; }), "");
+  EXPECT_NE(message([](SolverSettings& s) { s.multigrid.threads = 1025; }), "");
+  EXPECT_EQ(message([](SolverSettings& s) { s.multigrid.lineRatio = 0.5; }),
+            "multigrid lineRatio is 0.5; expected 0 (off) or a number >= 1");
+  EXPECT_THROW(parseSinglePrecision("half"), InvalidInputError);
+  EXPECT_TRUE(parseSinglePrecision("float"));
+  EXPECT_FALSE(parseSinglePrecision("double"));
 }
 
 TEST(SystemSolver, DivergingFloatCyclesAreUndoneAndDoubleCyclesTakeOver) {

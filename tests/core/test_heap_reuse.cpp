@@ -1,5 +1,5 @@
-// Core tests: the allocator setting of texgrad's programs (reuseFreedMemory), which every test
-// program applies at start-up (tests/support/heap_reuse_setup.cpp).
+// Core tests: the allocator setting programs opt into (reuseFreedMemory: the one-shot CLI
+// commands and the benchmarks), and that test programs start with the C library's default.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -51,8 +51,24 @@ std::string hugePageMode() {
 
 }  // namespace
 
+TEST(HeapReuse, TestProgramsStartWithTheDefaultAllocator) {
+  // A fresh run of this program ("threadsafe" death tests re-execute it and run this test
+  // alone): no library code or static initializer has changed malloc, so a block far above
+  // glibc's mapping threshold gets a mapping of its own, as in a library user's program.
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        const size_t bytes = size_t(64) << 20;
+        char* block = static_cast<char*>(std::malloc(bytes));
+        const bool inHeap = mappingOf(block + bytes / 2).find("[heap]") != std::string::npos;
+        std::free(block);
+        std::exit(inHeap ? 1 : 0);
+      },
+      ::testing::ExitedWithCode(0), "");
+}
+
 TEST(HeapReuse, LargeBlocksComeFromTheHeapWithHugePages) {
-  ASSERT_TRUE(reuseFreedMemory());  // also called at start-up: calling it again is harmless
+  ASSERT_TRUE(reuseFreedMemory());  // a second call (the next test's) is harmless
   const std::string mode = hugePageMode();
   std::ifstream overcommit("/proc/sys/vm/overcommit_memory");
   int overcommitMode = 0;

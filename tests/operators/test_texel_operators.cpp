@@ -163,6 +163,34 @@ TEST(TexelOperators, ModulatedStiffnessAndDeterminism) {
   EXPECT_LE((sum - c).norm(), 1e-14 * c.norm());
 }
 
+TEST(TexelOperators, AssembledForAnotherMetricMatchesSetMetricAndChangesNothing) {
+  const Built b = build(test::twoChartSquare(3, 0.05), 64);
+  const SparseMatrixd m = b.ops->mass(), s = b.ops->stiffness();
+  // An anisotropic metric, different on every face.
+  std::vector<Eigen::Matrix2d> metric = b.ops->metric();
+  for (size_t f = 0; f < metric.size(); ++f) {
+    const double shear = 0.1 * std::sin(static_cast<double>(f));
+    metric[f] = (Eigen::Matrix2d() << 2.0 + shear, shear, shear, 0.5).finished() *
+                (1.0 + 0.01 * static_cast<double>(f % 7));
+  }
+  const MassStiffness other = b.ops->assembledFor(metric);
+  auto identical = [](const SparseRefd& x, const SparseRefd& y) {
+    return x.nonZeros() == y.nonZeros() &&
+           std::equal(x.valuePtr(), x.valuePtr() + x.nonZeros(), y.valuePtr()) &&
+           std::equal(x.innerIndexPtr(), x.innerIndexPtr() + x.nonZeros(), y.innerIndexPtr());
+  };
+  // This object keeps its metric and matrices.
+  EXPECT_TRUE(identical(b.ops->mass(), m));
+  EXPECT_TRUE(identical(b.ops->stiffness(), s));
+  EXPECT_FALSE(identical(other.mass, m));
+  // Bit for bit what setMetric assembles for the same metric.
+  b.ops->setMetric(metric);
+  EXPECT_TRUE(identical(other.mass, b.ops->mass()));
+  EXPECT_TRUE(identical(other.stiffness, b.ops->stiffness()));
+  metric.pop_back();
+  EXPECT_THROW(b.ops->assembledFor(metric), InvalidInputError);
+}
+
 TEST(TexelOperators, AssembledOnceKeepsMAndSButRefusesToReassemble) {
   const TexturedMesh mesh = test::twoChartSquare(5);
   const Built kept = build(mesh, 64);

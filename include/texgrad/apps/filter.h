@@ -31,7 +31,8 @@ struct FilterOptions {
   SolverSettings solver = [] {
     SolverSettings s;
     s.kind = SolverKind::MultigridCg;
-    s.cycles = 16;
+    s.cycles = 16;  // if the kind is changed to Multigrid
+    s.maxIterations = 320;
     s.tolerance = 1e-4;
     return s;
   }();

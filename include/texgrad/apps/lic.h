@@ -16,7 +16,8 @@
 namespace texgrad {
 
 /// Solver settings LIC starts from: multigrid-preconditioned CG (plain V-cycles stall on the
-/// anisotropic metric, paper §8), up to 20 x 30 iterations, relative residual 1e-8.
+/// anisotropic metric, paper §8), up to 600 iterations, relative residual 1e-8 (30 V-cycles if
+/// the kind is changed to Multigrid).
 SolverSettings defaultLicSolver();
 
 /// Parameters of line integral convolution. Lengths refer to the unit-area surface (paper §7).
@@ -78,13 +79,14 @@ struct LicReport {
 };
 
 /// Stateful LIC for one domain and field: both systems are assembled and their solvers set up
-/// once; convolve() can then run for any noise. The domain's operators are borrowed to assemble
-/// M_h and S_h and are left with the metric they had. `domain` must outlive the object.
+/// once; convolve() can then run for any noise. M_h and S_h are assembled from the domain's
+/// operators (TexelOperators::assembledFor), which stay unchanged. `domain` must outlive the
+/// object.
 class LineIntegralConvolution {
  public:
   /// Builds h (anisotropicMetric), M_h, S_h and the two solvers; throws InvalidInputError on
   /// bad options or a field of the wrong size or zero everywhere.
-  LineIntegralConvolution(TexelDomain& domain, const std::vector<Eigen::Vector2d>& fieldTexel,
+  LineIntegralConvolution(const TexelDomain& domain, const std::vector<Eigen::Vector2d>& fieldTexel,
                           const LicOptions& options);
   ~LineIntegralConvolution();
   LineIntegralConvolution(const LineIntegralConvolution&) = delete;
@@ -121,7 +123,7 @@ Eigen::MatrixXd licContrast(const Eigen::MatrixXd& values, const Eigen::VectorXd
 
 /// One-shot LIC: noise from options.seed, diffusion, sharpening, contrast, image. Reports the
 /// stages "lic setup" and "lic solve" (0 and 1 each) to `progress`, which may cancel.
-LicResult lineIntegralConvolution(TexelDomain& domain,
+LicResult lineIntegralConvolution(const TexelDomain& domain,
                                   const std::vector<Eigen::Vector2d>& fieldTexel,
                                   const LicOptions& options, const ProgressCallback& progress = {});
 

@@ -24,8 +24,12 @@ enum class SolverKind {
 SolverKind parseSolverKind(const std::string& text);
 /// Name accepted by parseSolverKind.
 std::string toString(SolverKind kind);
+/// Parses "float" or "double" into SolverSettings::singlePrecision (true for float); throws
+/// InvalidInputError otherwise.
+bool parseSinglePrecision(const std::string& text);
 
-/// Solver choice and stopping rule; every CLI solver flag maps onto one field.
+/// Solver choice and stopping rule; every CLI solver flag maps onto one field, and the CLI
+/// accepts exactly the values validate() accepts.
 struct SolverSettings {
   SolverKind kind = SolverKind::Multigrid;
   MultigridOptions multigrid;  ///< levels, sweeps, threads
@@ -35,9 +39,20 @@ struct SolverSettings {
   /// (float rounding on a nearly singular A), the solver undoes it and changes to double cycles
   /// for good (SystemSolver::settings() then says so).
   bool singlePrecision = true;
-  int cycles = 6;          ///< V-cycles (Multigrid) or max CG iterations / 20 (MultigridCg)
-  double tolerance = 0.0;  ///< stop early below this relative residual (0: run all cycles)
-  /// Throws InvalidInputError naming the first bad field.
+  /// V-cycles per solve (Multigrid; at least 1). MultigridCg uses maxIterations, Direct neither.
+  int cycles = 6;
+  /// Most conjugate-gradient iterations per solve, each preconditioned by one V-cycle
+  /// (MultigridCg; at least 1). The other kinds do not use it.
+  int maxIterations = 120;
+  /// Stop once the relative residual ||b - A x|| / ||b|| is at most this (0 to 1). 0 means the
+  /// kind's default: Multigrid runs every cycle; MultigridCg stops at kDefaultCgTolerance (CG
+  /// has no use for iterations past double rounding). Direct solves exactly and ignores it.
+  double tolerance = 0.0;
+  /// The relative residual MultigridCg stops at when tolerance is 0.
+  static constexpr double kDefaultCgTolerance = 1e-8;
+  /// The relative residual this kind stops at: tolerance, or the kind's default for 0.
+  double effectiveTolerance() const;
+  /// Throws InvalidInputError naming the first bad field and its accepted range.
   void validate() const;
 };
 

@@ -25,7 +25,6 @@ class TexelDomain {
   const TexturedMesh& mesh() const { return mesh_; }
   const Atlas& atlas() const { return atlas_; }
   const TexelGrid& grid() const { return grid_; }
-  TexelOperators& operators() { return *operators_; }
   const TexelOperators& operators() const { return *operators_; }
   /// Number of unknowns (active texels).
   int unknowns() const { return grid_.unknownCount(); }

@@ -13,9 +13,11 @@ namespace texgrad {
 /// faults a 2 MB page instead of 512 small ones: spot at 2048^2 is ready to cycle (read,
 /// operators, multigrid set-up) in 3.4-3.9 s instead of 4.6-5.6 s there (interleaved runs).
 /// All threads share that heap (one malloc arena), so what a worker frees, any thread reuses.
-/// Freed memory is not returned to the system before exit. Call once at program start-up (the
-/// CLI, benchmarks and tests do); returns false, changing nothing, on other C libraries and
-/// under AddressSanitizer (which has its own allocator).
+/// Freed memory is not returned to the system before exit. A process-wide setting that a
+/// program opts into: the library never calls it. Call once at start-up of a program that runs
+/// one job and exits (the one-shot CLI commands and the benchmarks do; `texgrad view`, which
+/// runs until stopped, and the tests keep the default); returns false, changing nothing, on
+/// other C libraries and under AddressSanitizer (which has its own allocator).
 bool reuseFreedMemory();
 
 }  // namespace texgrad

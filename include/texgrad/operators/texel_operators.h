@@ -54,6 +54,13 @@ using SurfaceScalar = std::function<double(const fem::SurfacePoint&)>;
 /// coordinate differentials dx, dy of the point's face; for a 3-D gradient v use J^T v.
 using SurfaceOneForm = std::function<Eigen::Vector2d(const fem::SurfacePoint&)>;
 
+/// A mass and a stiffness matrix on the same unknowns (TexelOperators::assembledFor,
+/// buildMassStiffness).
+struct MassStiffness {
+  SparseMatrixd mass;       ///< M (|T| x |T|)
+  SparseMatrixd stiffness;  ///< S (|T| x |T|)
+};
+
 /// What the assembly saw.
 struct OperatorReport {
   int plainFullPieces = 0;     ///< pieces that are whole cells with exactly bilinear basis
@@ -83,6 +90,10 @@ class TexelOperators {
   void setMetric(std::vector<Eigen::Matrix2d> metric);
   /// Current per-face metric.
   const std::vector<Eigen::Matrix2d>& metric() const;
+  /// M and S for another per-face metric (as setMetric takes it), on the same pattern, leaving
+  /// this object's metric and matrices as they are (so operators shared by several apps stay
+  /// unchanged). Throws InvalidInputError as setMetric does.
+  MassStiffness assembledFor(const std::vector<Eigen::Matrix2d>& metric) const;
 
   /// Mass matrix M = *0 (|T| x |T|, SPD): M_st = int sqrt|g| phi_s phi_t (paper Sec. 5.2);
   /// units of surface area (1^T M 1 = surface area, 1 for the immersion metric).
@@ -128,11 +139,6 @@ class TexelOperators {
   std::unique_ptr<Impl> impl_;
 };
 
-/// Mass and stiffness matrices for the immersion metric (one-shot TexelOperators).
-struct MassStiffness {
-  SparseMatrixd mass;       ///< M (|T| x |T|)
-  SparseMatrixd stiffness;  ///< S (|T| x |T|)
-};
 /// Builds M and S of a mesh/atlas/grid for the immersion metric of the unit-area surface.
 MassStiffness buildMassStiffness(const TexturedMesh& mesh, const Atlas& atlas,
                                  const TexelGrid& grid, const OperatorOptions& options = {});

@@ -34,7 +34,14 @@ struct MultigridOptions {
   int minCoarseUnknowns = 256;
   /// Worker threads for relaxation and transfers; 0 = all available. Results do not depend on it.
   int threads = 0;
-  /// Throws InvalidInputError naming the first bad field.
+
+  // The accepted ranges, which validate() checks and front ends (the CLI's help) quote.
+  static constexpr int kMaxLevels = 16;         ///< levels in [0, kMaxLevels]
+  static constexpr int kMaxSweeps = 100;        ///< sweeps in [1, kMaxSweeps]
+  static constexpr double kMinLineRatio = 1.0;  ///< lineRatio 0 (off) or >= kMinLineRatio
+  static constexpr int kMaxWeakRowReach = 8;    ///< weakRowReach in [0, kMaxWeakRowReach]
+  static constexpr int kMaxThreads = 1024;      ///< threads in [0, kMaxThreads]
+  /// Throws InvalidInputError naming the first bad field and its accepted range.
   void validate() const;
 };
 

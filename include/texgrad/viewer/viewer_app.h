@@ -73,11 +73,9 @@ struct ViewerAppOptions {
 };
 
 /// Creates an app on `domain` (which must outlive it) for `texture` (filter input; stitch: the
-/// composite, with options.segments; the other apps only need its size). The lic app borrows the domain's operators while it sets up, so it needs
-/// the non-const overload; the const one throws InvalidInputError for it.
+/// composite, with options.segments; the other apps only need its size). No app changes the
+/// domain.
 std::unique_ptr<ViewerApp> makeViewerApp(ViewerAppKind kind, const TexelDomain& domain,
-                                         const Image& texture, const ViewerAppOptions& options);
-std::unique_ptr<ViewerApp> makeViewerApp(ViewerAppKind kind, TexelDomain& domain,
                                          const Image& texture, const ViewerAppOptions& options);
 
 /// Value of per-texel image `values` (channel `channel`) at a surface point: bilinear over the
