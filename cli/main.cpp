@@ -30,7 +30,9 @@ int main(int argc, char** argv) {
   texgrad::cli::addLicCommand(app);
   texgrad::cli::addReactCommand(app);
   texgrad::cli::addGeodesicCommand(app);
+#ifdef TEXGRAD_WITH_VIEWER  // TEXGRAD_BUILD_VIEWER
   texgrad::cli::addViewCommand(app);
+#endif
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
