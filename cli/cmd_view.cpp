@@ -1,6 +1,7 @@
 // `texgrad view`: serves the browser viewer for one mesh and app (filter, geodesic, react, lic,
 // stitch);
 // the solving is the apps', the serving the viewer module's; this file maps flags onto options.
+#include <filesystem>
 #include <iostream>
 
 #include "cli_common.h"
@@ -21,8 +22,21 @@ struct ViewArgs {
   viewer::ServerOptions server;
 };
 
+/// The page an installed program ships with (<prefix>/share/texgrad/viewer, found from the
+/// program's own path), else the source tree's viewer/dist of the build it came from.
+std::filesystem::path defaultWebRoot() {
+  std::error_code error;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (!error) {
+    const std::filesystem::path installed =
+        (self.parent_path() / TEXGRAD_VIEWER_FROM_BIN).lexically_normal();
+    if (std::filesystem::exists(installed / "index.html", error)) return installed;
+  }
+  return TEXGRAD_VIEWER_DIST;
+}
+
 void runView(ViewArgs& args) {
-  args.server.webRoot = args.server.webRoot.empty() ? TEXGRAD_VIEWER_DIST : args.server.webRoot;
+  if (args.server.webRoot.empty()) args.server.webRoot = defaultWebRoot();
   const viewer::ViewerAppKind kind = viewer::parseViewerAppKind(args.app);
   args.appOptions.validate();
   args.session.savePath = args.out;
@@ -54,6 +68,7 @@ void runView(ViewArgs& args) {
                             std::to_string(texture.width) + "x" + std::to_string(texture.height) +
                             "); resample the texture first");
   const int32_t faces = static_cast<int32_t>(mesh.faceCount());
+  std::cerr << "texgrad view: page from " << args.server.webRoot.string() << "\n";
   std::cerr << "texgrad view: building the " << width << "x" << height << " texel domain...\n";
   // The filter brush (S_beta), LIC (its metric) and stitch (S_beta) re-assemble; the geodesic
   // and reaction-diffusion apps use M and S only.
@@ -96,8 +111,8 @@ void addViewCommand(CLI::App& app) {
       ->default_val("127.0.0.1");
   cmd->add_option("--port", args->server.port, "TCP port (0: any free port)")->default_val(8080);
   cmd->add_option("--web-root", args->server.webRoot,
-                  "Folder with the built page (default: the viewer/dist this binary was built "
-                  "with)");
+                  "Folder with the built page (default: share/texgrad/viewer of the prefix "
+                  "this program is installed in, else the viewer/dist of its source tree)");
   cmd->add_option("--resolution", args->resolution, "WxH or N; must match the texture")
       ->check(resolutionValidator());
   cmd->add_option("--out,-o", args->out, "Where the page's Save button writes the result");

@@ -12,7 +12,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "texgrad: gradient-domain processing of surface signals inside a texture atlas.\n"
       "Meshes: .obj (+.mtl), .ply, .gltf, .glb, or builtin:NAME for a procedural mesh."};
-  app.set_version_flag("--version", "texgrad 0.1.0");
+  app.set_version_flag("--version", "texgrad " TEXGRAD_VERSION);  // project() in CMakeLists.txt
   app.require_subcommand(1);
   app.option_defaults()->always_capture_default(true);  // --help shows every default
   app.fallthrough(false);
@@ -30,7 +30,9 @@ int main(int argc, char** argv) {
   texgrad::cli::addLicCommand(app);
   texgrad::cli::addReactCommand(app);
   texgrad::cli::addGeodesicCommand(app);
+#ifdef TEXGRAD_WITH_VIEWER  // TEXGRAD_BUILD_VIEWER
   texgrad::cli::addViewCommand(app);
+#endif
   // One-shot commands allocate and free large texel buffers many times, then exit: they opt into
   // keeping freed memory for reuse (no fresh page faults; include/texgrad/core/heap_reuse.h).
   // `view` runs until stopped, mostly idle between edits: with glibc's defaults the memory its

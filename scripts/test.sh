@@ -3,7 +3,9 @@
 # the fast tests under AddressSanitizer+UBSan, then in Release the solver's fast tests again (its
 # SIMD kernels exist only there), the tests too slow for the sanitizer build (named *Slow*:
 # full-size shared meshes), the malloc tests the sanitizers exclude, and the viewer page's tests,
-# including its end-to-end tests in headless Chromium (CTest ViewerE2E).
+# including its end-to-end tests in headless Chromium (CTest ViewerE2E). Before the last tests,
+# scripts/test-consumers.sh builds an outside project against the installed package three ways
+# (find_package, pkg-config, add_subdirectory of a library-only shared build).
 # `ctest --test-dir build/release` afterwards runs the whole suite in Release. --no-label-summary
 # keeps ctest's "tests passed" summary the last thing printed (tests carry module labels).
 set -euo pipefail
@@ -15,15 +17,18 @@ jobs="$(nproc)"
 
 echo "== sanitizer build (ASan + UBSan)"
 # -O1 keeps the sanitizer build quick to compile and its tests quick to run; tests named *Slow*
-# (full-size shared meshes) run only in the Release pass below.
+# (full-size shared meshes) run only in the Release pass below. TEXGRAD_BUILD_VIEWER is explicit:
+# build trees configured before it meant the viewer module (it used to mean the page) cached OFF.
 bash scripts/build.sh build/asan -DCMAKE_BUILD_TYPE=None -DCMAKE_CXX_FLAGS="-O1 -g1" \
-  -DTEXGRAD_SANITIZE=ON -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_BENCHMARKS=OFF
+  -DTEXGRAD_SANITIZE=ON -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_BENCH=OFF -DTEXGRAD_BUILD_VIEWER=ON
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build/asan -j"$jobs" --output-on-failure --no-label-summary -E 'Slow'
 
 echo "== release build"
-bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_VIEWER=ON \
+bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_VIEWER_PAGE=ON \
   -DTEXGRAD_E2E_TESTS=ON
+echo "== consumers (install, find_package, pkg-config, add_subdirectory)"
+bash scripts/test-consumers.sh build/release
 # The solver's row kernels are compiled for AVX2 and AVX-512 only without the sanitizers
 # (src/solver/grid_kernels.h), so the solver's fast tests run again here on the kernels users get.
 ctest --test-dir build/release -j"$jobs" --output-on-failure --no-label-summary -L '^solver$'
