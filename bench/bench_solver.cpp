@@ -17,7 +17,7 @@ using namespace texgrad;
 
 namespace {
 
-/// Screening weight of the filter application (DESIGN.md §2).
+/// Screening weight of the filter application (paper Sec. 7.1).
 constexpr double kAlpha = 1e4;
 
 /// alpha M + S for a square chart of n x n Full cells in an (n + 3)^2 grid (Partial ring), built

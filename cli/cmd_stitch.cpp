@@ -137,6 +137,7 @@ void addStitchCommand(CLI::App& app) {
   addWeldToleranceOption(cmd, args->weldTolerance);
   SolverSettings solverDefaults;
   solverDefaults.cycles = 10;
+  solverDefaults.maxIterations = 200;  // --solver cg: as many iterations as before the limit had its own flag
   addSolverOptions(cmd, args->solver, solverDefaults);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runStitch(*args); }); });

@@ -82,7 +82,7 @@ void TexelBasis::buildSeams(const Atlas& atlas) {
       to[s] = corners_[e.face][(e.corner + 1) % 3];
       own[s] = latticeCrossings(from[s], to[s]);
     }
-    // Merge both sides' crossings into one parameter sequence along side a (DESIGN.md Sec. 3.2).
+    // Merge both sides' crossings into one parameter sequence along side a (paper Sec. 4.1).
     const bool same = pair.sameDirection;
     std::vector<std::tuple<double, int, int>> merged;  // (t along a, index in own[0], own[1])
     const size_t nb = own[1].size();

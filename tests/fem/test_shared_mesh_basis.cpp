@@ -1,4 +1,4 @@
-// Function-space guarantees (DESIGN.md Sec. 3) on every mesh of ../shared/data at 256^2 and
+// Function-space guarantees (paper Sec. 4) on every mesh of ../shared/data at 256^2 and
 // 1024^2: partition of unity at random points and continuity at random seam-equivalent pairs.
 #include <gtest/gtest.h>
 

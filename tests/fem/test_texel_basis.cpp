@@ -1,4 +1,4 @@
-// Function-space guarantees (DESIGN.md Sec. 3): partition of unity, phi_t = B_t on interior
+// Function-space guarantees (paper Sec. 4): partition of unity, phi_t = B_t on interior
 // texels, seam continuity; clipping conformity and lattice-aligned input.
 #include <gtest/gtest.h>
 

@@ -69,7 +69,7 @@ double signedUvArea(const TexturedMesh& m, size_t f) {
   return 0.5 * (e1.x() * e2.y() - e1.y() * e2.x());
 }
 
-/// Charts: faces joined across edges shared in UV index space (DESIGN.md §2).
+/// Charts: faces joined across edges shared in UV index space (docs/architecture.md, Conventions).
 std::vector<int> chartOfFace(const TexturedMesh& m) {
   std::vector<int> parent(m.faceCount());
   std::iota(parent.begin(), parent.end(), 0);

@@ -1,4 +1,4 @@
-// Operator invariants (DESIGN.md Sec. 4) on every mesh of ../shared/data at 256^2 and 1024^2:
+// Operator invariants (paper Sec. 5) on every mesh of ../shared/data at 256^2 and 1024^2:
 // S 1 = 0, 1^T M 1 = 1 (unit-area surface), positive diagonals, clean clipping; at 256^2 also
 // M positive definite and S positive semi-definite with one null vector per connected component.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Operator properties (DESIGN.md Sec. 4): S 1 = 0, unit area, SPD/PSD, flat stencils, conformal
+// Operator properties (paper Sec. 5): S 1 = 0, unit area, SPD/PSD, flat stencils, conformal
 // invariance, d^T *1 d = S, convergence, per-cell modulation and thread-count determinism.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

@@ -1,5 +1,5 @@
 // One front for every app's linear solves: multigrid (float or double cycles), multigrid-
-// preconditioned CG, or CHOLMOD, with the init / update / solve phases kept apart (DESIGN.md §5).
+// preconditioned CG, or CHOLMOD, with the init / update / solve phases kept apart (paper Sec. 6).
 #pragma once
 
 #include <Eigen/Core>

@@ -1,4 +1,4 @@
-// Step 1-2 of the function space (DESIGN.md Sec. 3): split face edges where they cross lattice
+// Step 1-2 of the function space (paper Sec. 4.1): split face edges where they cross lattice
 // lines (and at seam points), then clip each UV triangle into convex pieces T ∩ cell.
 #pragma once
 

@@ -1,5 +1,5 @@
 // Per-face Riemannian metrics in texel coordinates: the immersion metric of the (unit-area) surface
-// and its regularisation; operators/ integrates against them (paper Sec. 5.2, DESIGN.md Sec. 2).
+// and its regularisation; operators/ integrates against them (paper Sec. 5.2).
 #pragma once
 
 #include <Eigen/Core>

@@ -1,5 +1,5 @@
 // Exact integration rules for fem/ and operators/: symmetric triangle rules (degrees 2, 4, 6) and
-// Gauss-Legendre on segments, used on the refinement T (+) T-hat (paper Sec. 5.2, DESIGN.md Sec. 4).
+// Gauss-Legendre on segments, used on the refinement T (+) T-hat (paper Sec. 5.2).
 #pragma once
 
 #include <span>

@@ -1,4 +1,4 @@
-// Steps 3-5 of the function space (paper Sec. 4.1, DESIGN.md Sec. 3): the seam-continuous texel
+// Steps 3-5 of the function space (paper Sec. 4.1): the seam-continuous texel
 // basis phi_t built from quadratic Lagrange elements on the cell pieces, plus point evaluation.
 #pragma once
 
@@ -75,7 +75,7 @@ std::array<double, 6> quadraticShape(const Eigen::Vector3d& b);
 /// classes of nodes, evaluates phi_t anywhere on M. The mesh and grid must outlive it.
 class TexelBasis {
  public:
-  /// Precomputes seam splits (DESIGN.md Sec. 3 step 2) and vertex classes; O(faces + seam length).
+  /// Precomputes seam splits (paper Sec. 4.1) and vertex classes; O(faces + seam length).
   TexelBasis(const TexturedMesh& mesh, const Atlas& atlas, const TexelGrid& grid,
              const TexelBasisOptions& options = {});
 
