@@ -137,7 +137,8 @@ void addStitchCommand(CLI::App& app) {
   addWeldToleranceOption(cmd, args->weldTolerance);
   SolverSettings solverDefaults;
   solverDefaults.cycles = 10;
-  solverDefaults.maxIterations = 200;  // --solver cg: as many iterations as before the limit had its own flag
+  // --solver cg: 20 iterations per cycle, the limit stitch had before it got its own flag.
+  solverDefaults.maxIterations = 200;
   addSolverOptions(cmd, args->solver, solverDefaults);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runStitch(*args); }); });

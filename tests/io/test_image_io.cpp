@@ -162,7 +162,8 @@ TEST(ImageIo, SampleTextureRoundTripsExactlyAsPng) {
     ASSERT_EQ(std::lround(read.pixels[k] * 255.0f), std::lround(texture.pixels[k] * 255.0f)) << k;
 }
 
-// docs/architecture.md, Conventions: texel row 0 is the bottom of the picture, i.e. the file's last scanline.
+// docs/architecture.md, Conventions: texel row 0 is the bottom of the picture, i.e. the file's
+// last scanline.
 TEST(ImageIo, TexelRowZeroIsTheLastScanlineOfTheFile) {
   const auto dir = tempDir("flip");
   const int w = 5, h = 4;
