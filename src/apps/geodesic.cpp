@@ -45,6 +45,7 @@ constexpr double kBoundaryStep = 0.25;
 /// and then moves by a few per cent either way), so more cycles would not change u.
 constexpr double kHeatSettledCeiling = 1e-4;
 constexpr double kHeatStallRatio = 0.9;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 /// Last residual of a report, or NaN if it holds none.
 double lastResidual(const SolveReport& report) {
@@ -115,7 +116,10 @@ GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions&
   gradients_ = std::make_unique<Gradients>(domain, options_.solver.multigrid.threads);
   // A1 and A2 live in their solvers only (SystemSolver::matrix()).
   diffusionSolver_.initAndUpdate(options_.alpha * ops.mass() + ops.stiffness());
-  distanceSolver_.initAndUpdate(ops.stiffness() + kDistanceScreening * ops.mass());
+  // The cut-cell ghost penalty keeps barely covered texels from amplifying the inconsistency
+  // of the normalised gradient (see Gradients::stabiliser).
+  distanceSolver_.initAndUpdate(ops.stiffness() + kDistanceScreening * ops.mass() +
+                                gradients_->stabiliser(domain.unknowns()));
   labelComponents();
   if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
     buildDirichlet();
@@ -210,7 +214,12 @@ void GeodesicSolver::setSources(std::span<const GeodesicSource> sources) {
   Eigen::MatrixXd impulse = Eigen::MatrixXd::Zero(domain_->unknowns(), 1);
   for (const GeodesicSource& source : sources) {
     resolved.push_back(resolveSource(*domain_, source));
-    weights.push_back(domain_->operators().basis().evaluate(resolved.back().point));
+    // A unit impulse on every sheet through the source: at a non-manifold vertex the sheets
+    // share no texel, and heat put on one of them would never reach the others.
+    weights.emplace_back();
+    for (const fem::SurfacePoint& sheet : resolved.back().sheets)
+      for (const fem::TexelWeight& w : domain_->operators().basis().evaluate(sheet))
+        weights.back().push_back(w);
     if (weights.back().empty())
       throw InvalidInputError("no texel basis function covers the source at UV (" +
                               std::to_string(resolved.back().uv.x()) + ", " +
@@ -356,25 +365,49 @@ void GeodesicSolver::collectNearField() {
       [](const NearFieldTexel& a, const NearFieldTexel& b) { return a.source < b.source; });
 }
 
-double GeodesicSolver::offset() const {
-  // Per source: median of y - chord over its near-field texels (the median shrugs off texels
-  // across a crease, where chord < geodesic), else the value at the source; then the mean.
-  double total = 0.0;
-  std::vector<double> differences;
+std::vector<double> GeodesicSolver::offsets() const {
+  // Each component of A2's support graph has its own constant. Per source and component: median
+  // of y - chord over its near-field texels there (the median shrugs off texels across a crease,
+  // where chord < geodesic), else the value at the source; then the mean over the sources.
+  std::vector<double> total(static_cast<size_t>(componentCount_), 0.0);
+  std::vector<int> count(static_cast<size_t>(componentCount_), 0);
+  std::vector<std::pair<int32_t, double>> differences;  // (component, y - chord)
+  std::vector<double> value, weight, group;
   auto texel = nearField_.begin();
   for (size_t s = 0; s < sources_.size(); ++s) {
     differences.clear();
     for (; texel != nearField_.end() && texel->source == static_cast<int32_t>(s); ++texel)
-      differences.push_back(y_(texel->unknown, 0) - texel->distance);
-    if (static_cast<int>(differences.size()) >= kMinNearFieldTexels) {
-      const auto middle = differences.begin() + static_cast<std::ptrdiff_t>(differences.size() / 2);
-      std::nth_element(differences.begin(), middle, differences.end());
-      total += *middle;
-      continue;
+      differences.emplace_back(component_[static_cast<size_t>(texel->unknown)],
+                               y_(texel->unknown, 0) - texel->distance);
+    std::sort(differences.begin(), differences.end());
+    value.assign(total.size(), 0.0);
+    weight.assign(total.size(), 0.0);
+    for (const fem::TexelWeight& w : sourceWeights_[s]) {
+      const auto c = static_cast<size_t>(component_[static_cast<size_t>(w.unknown)]);
+      value[c] += w.weight * y_(w.unknown, 0);
+      weight[c] += w.weight;
     }
-    for (const fem::TexelWeight& w : sourceWeights_[s]) total += w.weight * y_(w.unknown, 0);
+    for (size_t c = 0; c < total.size(); ++c) {
+      if (!(weight[c] > 0.0)) continue;
+      const auto lo = std::lower_bound(differences.begin(), differences.end(),
+                                       std::make_pair(static_cast<int32_t>(c), -kInfinity));
+      const auto hi = std::lower_bound(lo, differences.end(),
+                                       std::make_pair(static_cast<int32_t>(c + 1), -kInfinity));
+      group.clear();
+      for (auto it = lo; it != hi; ++it) group.push_back(it->second);
+      if (static_cast<int>(group.size()) >= kMinNearFieldTexels) {
+        const auto middle = group.begin() + static_cast<std::ptrdiff_t>(group.size() / 2);
+        std::nth_element(group.begin(), middle, group.end());
+        total[c] += *middle;
+      } else {
+        total[c] += value[c] / weight[c];
+      }
+      ++count[c];
+    }
   }
-  return total / static_cast<double>(sources_.size());
+  for (size_t c = 0; c < total.size(); ++c)
+    if (count[c] > 0) total[c] /= count[c];
+  return total;
 }
 
 void GeodesicSolver::setSource(const GeodesicSource& source) {
@@ -422,17 +455,16 @@ void GeodesicSolver::distanceStep(bool full) {
   // y moves by its offset every time, so its constant part stays the size of the distances. With
   // float V-cycles (refine), S's float rounding perturbs its null space (the constants) by far
   // more than eps M: a drifting constant in y would leak into the distances.
-  const double shift = offset();
-  const double infinity = std::numeric_limits<double>::infinity();
+  const std::vector<double> shift = offsets();
   gradients_->arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, y_.rows(), kGeodesicUnknownsPerTask),
-                      [&](const tbb::blocked_range<Eigen::Index>& range) {
-                        for (Eigen::Index u = range.begin(); u != range.end(); ++u) {
-                          y_(u, 0) -= shift;
-                          distances_[u] =
-                              reachable_[static_cast<size_t>(u)] ? y_(u, 0) * scale_ : infinity;
-                        }
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<Eigen::Index>(0, y_.rows(), kGeodesicUnknownsPerTask),
+        [&](const tbb::blocked_range<Eigen::Index>& range) {
+          for (Eigen::Index u = range.begin(); u != range.end(); ++u) {
+            y_(u, 0) -= shift[static_cast<size_t>(component_[static_cast<size_t>(u)])];
+            distances_[u] = reachable_[static_cast<size_t>(u)] ? y_(u, 0) * scale_ : kInfinity;
+          }
+        });
   });
   timings_.distance = secondsSince(start);
 }

@@ -107,11 +107,15 @@ struct GeodesicResult {
 /// Heat-method geodesic distances on one TexelDomain (paper Sec. 7.3).
 ///
 /// init (constructor, once per mesh and resolution): per-element gradient samples of the texel
-/// basis, symbolic and numeric set-up of both systems A1 = alpha M + S and A2 = S + eps M
-/// (eps = kDistanceScreening: S alone is singular), and with GeodesicBoundary::Average on a mesh
-/// with open boundary, A1 with Dirichlet rows. Per source set: b = sum_s phi_t(p_s) (a unit
-/// impulse per source), A1 u = b; X = -grad u / |grad u|_g per element with one-point quadrature;
-/// A2 y = div_h(g X); the constant of y is fixed by GeodesicOptions::offset.
+/// basis, symbolic and numeric set-up of both systems A1 = alpha M + S and A2 = S + eps M + G
+/// (eps = kDistanceScreening: S alone is singular; G a ghost penalty on the twist of cells that
+/// their chart covers only in part, beyond the paper: without it a texel whose basis function
+/// barely meets M takes any value that fits the normalised gradient on its sliver, -1.44 on
+/// Lantern where distances reach 8.6), and with GeodesicBoundary::Average on a mesh with open
+/// boundary, A1 with Dirichlet rows. Per source set: b = sum_s phi_t(p_s) (a unit impulse per
+/// source and per sheet of the surface through it), A1 u = b; X = -grad u / |grad u|_g per
+/// element with one-point quadrature; A2 y = div_h(g X); the constant of y is fixed by
+/// GeodesicOptions::offset in each connected component.
 ///
 /// Units: operators live on the unit-area surface (DESIGN.md Sec. 2); distances() multiplies
 /// by unitScale() = sqrt(3-D area of M) so every distance it returns is in model units.
@@ -197,7 +201,8 @@ class GeodesicSolver {
   void findReachable();
   void buildDirichlet();
   void updateDirichlet();
-  double offset() const;
+  /// Per component of A1's support graph: the constant to subtract from y (GeodesicOffset).
+  std::vector<double> offsets() const;
   void requireSources() const;
   void resetIterates();
   void diffusionStep(bool full);
