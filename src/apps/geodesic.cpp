@@ -100,7 +100,63 @@ GeodesicOptions GeodesicOptions::interactive() {
   return options;
 }
 
-GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options)
+/// The solver's state: both systems, the sources and the iterates (see GeodesicSolver).
+struct GeodesicSolver::Impl {
+  Impl(const TexelDomain& domain, const GeodesicOptions& options);
+  void setAlpha(double alpha);
+  void setSources(std::span<const GeodesicSource> sources);
+  void update();
+  double residual() const;
+  void solve();
+  const Eigen::MatrixXd& diffused() const { return dirichletSolver_ ? heat_ : u_; }
+
+  /// Interior texel near a source with its chord distance (unit-area units), for NearField.
+  struct NearFieldTexel {
+    int32_t unknown = -1;
+    int32_t source = -1;
+    double distance = 0.0;
+  };
+  void collectNearField();
+  /// Labels the connected components of the support graph of A1 (component_).
+  void labelComponents();
+  /// Marks the unknowns in a component that holds a source (reachable_).
+  void findReachable();
+  void buildDirichlet();
+  void updateDirichlet();
+  /// Per component of A1's support graph: the constant to subtract from y (GeodesicOffset).
+  std::vector<double> offsets() const;
+  void requireSources() const;
+  void resetIterates();
+  void diffusionStep(bool full);
+  void distanceStep(bool full);
+
+  const TexelDomain* domain_;
+  GeodesicOptions options_;
+  double scale_ = 1.0;
+  std::unique_ptr<GeodesicGradients> gradients_;
+  SystemSolver diffusionSolver_, distanceSolver_;
+  std::unique_ptr<SystemSolver> dirichletSolver_;  ///< only with Average on meshes with boundary
+  std::vector<uint8_t> dirichlet_;  ///< per unknown: held at zero in the Dirichlet diffusion
+  int dirichletCount_ = 0;
+  std::vector<ResolvedSource> sources_;
+  std::vector<std::vector<fem::TexelWeight>> sourceWeights_;  ///< phi_t(p_s) per source
+  std::vector<NearFieldTexel> nearField_;                     ///< sorted by source
+  std::vector<uint8_t> reachable_;  ///< per unknown: connected to a source
+  std::vector<int32_t> component_;  ///< per unknown: its component of A1's support graph
+  int32_t componentCount_ = 0;
+  std::vector<int32_t> vertexFaceBegin_, vertexFaces_;  ///< faces around each 3-D vertex (CSR)
+  /// n x 1 blocks for SystemSolver: impulse b (and b with Dirichlet rows zeroed), Neumann and
+  /// Dirichlet diffusions, the heat u used for the gradient, divergence, potential y.
+  Eigen::MatrixXd impulse_, impulseDirichlet_, u_, uDirichlet_, heat_, divergence_, y_;
+  Eigen::VectorXd distances_;
+  SolveReport diffusionReport_, distanceReport_;
+  GeodesicTimings timings_;
+  bool heatSettled_ = false;  ///< update() no longer cycles on the heat
+  double heatResidual_ = std::numeric_limits<double>::infinity();  ///< of the last heat update
+  bool heatChanged_ = true;  ///< u changed since the divergence was last computed
+};
+
+GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& options)
     : domain_(&domain),
       options_([&] {
         options.validate();
@@ -113,7 +169,7 @@ GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions&
   const double area = ops.report().metric.surfaceArea;
   if (!(area > 0.0)) throw InvalidInputError("the mesh has zero surface area; no distances exist");
   scale_ = std::sqrt(area);
-  gradients_ = std::make_unique<Gradients>(domain, options_.solver.multigrid.threads);
+  gradients_ = std::make_unique<GeodesicGradients>(domain, options_.solver.multigrid.threads);
   // A1 and A2 live in their solvers only (SystemSolver::matrix()).
   diffusionSolver_.initAndUpdate(options_.alpha * ops.mass() + ops.stiffness());
   // The cut-cell ghost penalty keeps barely covered texels from amplifying the inconsistency
@@ -140,11 +196,7 @@ GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions&
   timings_.setup = secondsSince(start);
 }
 
-GeodesicSolver::~GeodesicSolver() = default;
-GeodesicSolver::GeodesicSolver(GeodesicSolver&&) noexcept = default;
-GeodesicSolver& GeodesicSolver::operator=(GeodesicSolver&&) noexcept = default;
-
-void GeodesicSolver::buildDirichlet() {
+void GeodesicSolver::Impl::buildDirichlet() {
   const TexelGrid& grid = domain_->grid();
   const fem::TexelBasis& basis = domain_->operators().basis();
   dirichlet_.assign(static_cast<size_t>(domain_->unknowns()), 0);
@@ -172,7 +224,7 @@ void GeodesicSolver::buildDirichlet() {
   updateDirichlet();
 }
 
-void GeodesicSolver::updateDirichlet() {
+void GeodesicSolver::Impl::updateDirichlet() {
   // A1 with the rows and columns of held texels reduced to their diagonal: same pattern, SPD.
   Eigen::SparseMatrix<double> a = diffusionSolver_.matrix();
   for (int j = 0; j < a.outerSize(); ++j)
@@ -183,7 +235,7 @@ void GeodesicSolver::updateDirichlet() {
   dirichletSolver_->update(std::move(a));
 }
 
-void GeodesicSolver::resetIterates() {
+void GeodesicSolver::Impl::resetIterates() {
   const int n = domain_->unknowns();
   heatSettled_ = false;
   heatResidual_ = std::numeric_limits<double>::infinity();
@@ -196,7 +248,7 @@ void GeodesicSolver::resetIterates() {
   distances_ = Eigen::VectorXd::Zero(n);
 }
 
-void GeodesicSolver::setAlpha(double alpha) {
+void GeodesicSolver::Impl::setAlpha(double alpha) {
   GeodesicOptions next = options_;
   next.alpha = alpha;
   next.validate();
@@ -207,7 +259,7 @@ void GeodesicSolver::setAlpha(double alpha) {
   resetIterates();
 }
 
-void GeodesicSolver::setSources(std::span<const GeodesicSource> sources) {
+void GeodesicSolver::Impl::setSources(std::span<const GeodesicSource> sources) {
   if (sources.empty()) throw InvalidInputError("geodesic distances need at least one source");
   std::vector<ResolvedSource> resolved;
   std::vector<std::vector<fem::TexelWeight>> weights;
@@ -237,7 +289,7 @@ void GeodesicSolver::setSources(std::span<const GeodesicSource> sources) {
   resetIterates();
 }
 
-void GeodesicSolver::labelComponents() {
+void GeodesicSolver::Impl::labelComponents() {
   const Eigen::SparseMatrix<double>& a1 = diffusionSolver_.matrix();
   const int n = static_cast<int>(a1.outerSize());
   component_.assign(static_cast<size_t>(n), -1);
@@ -259,7 +311,7 @@ void GeodesicSolver::labelComponents() {
   }
 }
 
-void GeodesicSolver::findReachable() {
+void GeodesicSolver::Impl::findReachable() {
   std::vector<uint8_t> reached(static_cast<size_t>(componentCount_), 0);
   for (const auto& weights : sourceWeights_)
     for (const fem::TexelWeight& w : weights)
@@ -269,7 +321,7 @@ void GeodesicSolver::findReachable() {
     reachable_[u] = reached[static_cast<size_t>(component_[u])];
 }
 
-void GeodesicSolver::collectNearField() {
+void GeodesicSolver::Impl::collectNearField() {
   nearField_.clear();
   if (options_.offset != GeodesicOffset::NearField) return;
   const TexturedMesh& mesh = domain_->mesh();
@@ -365,7 +417,7 @@ void GeodesicSolver::collectNearField() {
       [](const NearFieldTexel& a, const NearFieldTexel& b) { return a.source < b.source; });
 }
 
-std::vector<double> GeodesicSolver::offsets() const {
+std::vector<double> GeodesicSolver::Impl::offsets() const {
   // Each component of A2's support graph has its own constant. Per source and component: median
   // of y - chord over its near-field texels there (the median shrugs off texels across a crease,
   // where chord < geodesic), else the value at the source; then the mean over the sources.
@@ -410,16 +462,12 @@ std::vector<double> GeodesicSolver::offsets() const {
   return total;
 }
 
-void GeodesicSolver::setSource(const GeodesicSource& source) {
-  setSources({&source, 1});
-}
-
-void GeodesicSolver::requireSources() const {
+void GeodesicSolver::Impl::requireSources() const {
   if (sources_.empty())
     throw InvalidInputError("GeodesicSolver: call setSources before update or solve");
 }
 
-void GeodesicSolver::diffusionStep(bool full) {
+void GeodesicSolver::Impl::diffusionStep(bool full) {
   const auto start = Clock::now();
   timings_.diffusion = 0.0;
   if (!full && heatSettled_) return;  // u, and so the divergence, stay as they are
@@ -442,7 +490,7 @@ void GeodesicSolver::diffusionStep(bool full) {
   timings_.diffusion = secondsSince(start);
 }
 
-void GeodesicSolver::distanceStep(bool full) {
+void GeodesicSolver::Impl::distanceStep(bool full) {
   auto start = Clock::now();
   if (heatChanged_) {
     gradients_->divergence(diffused().data(), divergence_.data(), divergence_.rows());
@@ -469,13 +517,13 @@ void GeodesicSolver::distanceStep(bool full) {
   timings_.distance = secondsSince(start);
 }
 
-void GeodesicSolver::update() {
+void GeodesicSolver::Impl::update() {
   requireSources();
   diffusionStep(false);
   distanceStep(false);
 }
 
-double GeodesicSolver::residual() const {
+double GeodesicSolver::Impl::residual() const {
   requireSources();
   double worst = diffusionSolver_.relativeResidual(impulse_, u_);
   if (dirichletSolver_)
@@ -483,10 +531,68 @@ double GeodesicSolver::residual() const {
   return std::max(worst, distanceSolver_.relativeResidual(divergence_, y_));
 }
 
-void GeodesicSolver::solve() {
+void GeodesicSolver::Impl::solve() {
   requireSources();
   diffusionStep(true);
   distanceStep(true);
+}
+
+GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options)
+    : impl_(std::make_unique<Impl>(domain, options)) {}
+GeodesicSolver::~GeodesicSolver() = default;
+GeodesicSolver::GeodesicSolver(GeodesicSolver&&) noexcept = default;
+GeodesicSolver& GeodesicSolver::operator=(GeodesicSolver&&) noexcept = default;
+
+void GeodesicSolver::setAlpha(double alpha) {
+  impl_->setAlpha(alpha);
+}
+void GeodesicSolver::setSources(std::span<const GeodesicSource> sources) {
+  impl_->setSources(sources);
+}
+void GeodesicSolver::setSource(const GeodesicSource& source) {
+  impl_->setSources({&source, 1});
+}
+void GeodesicSolver::update() {
+  impl_->update();
+}
+bool GeodesicSolver::heatSettled() const {
+  return impl_->heatSettled_;
+}
+double GeodesicSolver::residual() const {
+  return impl_->residual();
+}
+void GeodesicSolver::solve() {
+  impl_->solve();
+}
+const Eigen::VectorXd& GeodesicSolver::distances() const {
+  return impl_->distances_;
+}
+const Eigen::MatrixXd& GeodesicSolver::diffused() const {
+  return impl_->diffused();
+}
+const std::vector<uint8_t>& GeodesicSolver::reachable() const {
+  return impl_->reachable_;
+}
+int GeodesicSolver::dirichletTexels() const {
+  return impl_->dirichletCount_;
+}
+double GeodesicSolver::unitScale() const {
+  return impl_->scale_;
+}
+const std::vector<ResolvedSource>& GeodesicSolver::sources() const {
+  return impl_->sources_;
+}
+const SolveReport& GeodesicSolver::diffusionReport() const {
+  return impl_->diffusionReport_;
+}
+const SolveReport& GeodesicSolver::distanceReport() const {
+  return impl_->distanceReport_;
+}
+const GeodesicTimings& GeodesicSolver::timings() const {
+  return impl_->timings_;
+}
+const GeodesicOptions& GeodesicSolver::options() const {
+  return impl_->options_;
 }
 
 GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,

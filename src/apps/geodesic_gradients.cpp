@@ -31,12 +31,12 @@ constexpr double kTwistEnergy = 1.0 / 12.0;
 
 }  // namespace
 
-GeodesicSolver::Gradients::Gradients(const TexelDomain& domain, int threads)
+GeodesicGradients::GeodesicGradients(const TexelDomain& domain, int threads)
     : arena(threads > 0 ? threads : tbb::task_arena::automatic) {
   arena.execute([&] { build(domain); });
 }
 
-void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
+void GeodesicGradients::build(const TexelDomain& domain) {
   const fem::TexelBasis& basis = domain.operators().basis();
   const TexelGrid& grid = domain.grid();
   const auto& metric = domain.operators().metric();
@@ -162,8 +162,8 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
   seamDirections.resize(seams.size());
 }
 
-void GeodesicSolver::Gradients::collectCutCells(const fem::TexelBasis& basis, const TexelGrid& grid,
-                                                std::vector<CellCover> covers) {
+void GeodesicGradients::collectCutCells(const fem::TexelBasis& basis, const TexelGrid& grid,
+                                        std::vector<CellCover> covers) {
   std::sort(covers.begin(), covers.end(), [](const CellCover& a, const CellCover& b) {
     return a.cell != b.cell ? a.cell < b.cell : a.chart < b.chart;
   });
@@ -188,7 +188,7 @@ void GeodesicSolver::Gradients::collectCutCells(const fem::TexelBasis& basis, co
   }
 }
 
-Eigen::SparseMatrix<double> GeodesicSolver::Gradients::stabiliser(Eigen::Index n) const {
+Eigen::SparseMatrix<double> GeodesicGradients::stabiliser(Eigen::Index n) const {
   constexpr std::array<double, 4> kTwist{1.0, -1.0, -1.0, 1.0};
   std::vector<Eigen::Triplet<double>> entries;
   entries.reserve(16 * cutCells.size());
@@ -216,9 +216,8 @@ inline Eigen::Vector2d descentDirection(double gx, double gy, double hxx, double
 
 }  // namespace
 
-void GeodesicSolver::Gradients::addRowDivergence(const CellSample* first, const CellSample* last,
-                                                 const FaceMetric* metrics, const double* u,
-                                                 double* div) {
+void GeodesicGradients::addRowDivergence(const CellSample* first, const CellSample* last,
+                                         const FaceMetric* metrics, const double* u, double* div) {
   // The samples of one cell row come by column, so the sums for the two texel columns of the
   // current cell stay in registers and each texel is written once per row: adding every sample
   // straight into div chains each addition behind the previous sample's store to that texel.
@@ -257,7 +256,7 @@ void GeodesicSolver::Gradients::addRowDivergence(const CellSample* first, const 
   for (int k = 0; k < 4; ++k) flush(k);
 }
 
-void GeodesicSolver::Gradients::divergence(const double* u, double* div, Eigen::Index n) {
+void GeodesicGradients::divergence(const double* u, double* div, Eigen::Index n) {
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, n, kGeodesicUnknownsPerTask),
                       [&](const tbb::blocked_range<Eigen::Index>& range) {

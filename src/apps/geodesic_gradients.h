@@ -20,7 +20,7 @@ constexpr Eigen::Index kGeodesicUnknownsPerTask = 1 << 14;
 /// One-point quadrature samples of the texel-basis gradients (paper Sec. 7.3): one per plain
 /// piece T ∩ cell (at its centroid) and one per quadratic element of seam pieces (at its
 /// centroid). div_h(omega)_t = sum_q weight_q dphi_t(q) . X_q with X_q = g^-1 omega_q.
-struct GeodesicSolver::Gradients {
+struct GeodesicGradients {
   /// Piece with exactly bilinear basis: four cell texels, centroid in cell-local coordinates.
   /// Compact (the divergence streams every sample once per update); the metric comes from the
   /// face.
@@ -66,7 +66,7 @@ struct GeodesicSolver::Gradients {
   tbb::task_arena arena;
 
   /// Samples of `domain`, built and later summed on `threads` threads (0: all).
-  Gradients(const TexelDomain& domain, int threads);
+  GeodesicGradients(const TexelDomain& domain, int threads);
 
   void build(const TexelDomain& domain);
   /// Fills cutCells from the per-piece covers (cell, chart, area, area * tr(g^-1) sqrt|g|).
