@@ -45,6 +45,7 @@ constexpr double kBoundaryStep = 0.25;
 /// and then moves by a few per cent either way), so more cycles would not change u.
 constexpr double kHeatSettledCeiling = 1e-4;
 constexpr double kHeatStallRatio = 0.9;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 /// Last residual of a report, or NaN if it holds none.
 double lastResidual(const SolveReport& report) {
@@ -99,7 +100,63 @@ GeodesicOptions GeodesicOptions::interactive() {
   return options;
 }
 
-GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options)
+/// The solver's state: both systems, the sources and the iterates (see GeodesicSolver).
+struct GeodesicSolver::Impl {
+  Impl(const TexelDomain& domain, const GeodesicOptions& options);
+  void setAlpha(double alpha);
+  void setSources(std::span<const GeodesicSource> sources);
+  void update();
+  double residual() const;
+  void solve();
+  const Eigen::MatrixXd& diffused() const { return dirichletSolver_ ? heat_ : u_; }
+
+  /// Interior texel near a source with its chord distance (unit-area units), for NearField.
+  struct NearFieldTexel {
+    int32_t unknown = -1;
+    int32_t source = -1;
+    double distance = 0.0;
+  };
+  void collectNearField();
+  /// Labels the connected components of the support graph of A1 (component_).
+  void labelComponents();
+  /// Marks the unknowns in a component that holds a source (reachable_).
+  void findReachable();
+  void buildDirichlet();
+  void updateDirichlet();
+  /// Per component of A1's support graph: the constant to subtract from y (GeodesicOffset).
+  std::vector<double> offsets() const;
+  void requireSources() const;
+  void resetIterates();
+  void diffusionStep(bool full);
+  void distanceStep(bool full);
+
+  const TexelDomain* domain_;
+  GeodesicOptions options_;
+  double scale_ = 1.0;
+  std::unique_ptr<GeodesicGradients> gradients_;
+  SystemSolver diffusionSolver_, distanceSolver_;
+  std::unique_ptr<SystemSolver> dirichletSolver_;  ///< only with Average on meshes with boundary
+  std::vector<uint8_t> dirichlet_;  ///< per unknown: held at zero in the Dirichlet diffusion
+  int dirichletCount_ = 0;
+  std::vector<ResolvedSource> sources_;
+  std::vector<std::vector<fem::TexelWeight>> sourceWeights_;  ///< phi_t(p_s) per source
+  std::vector<NearFieldTexel> nearField_;                     ///< sorted by source
+  std::vector<uint8_t> reachable_;  ///< per unknown: connected to a source
+  std::vector<int32_t> component_;  ///< per unknown: its component of A1's support graph
+  int32_t componentCount_ = 0;
+  std::vector<int32_t> vertexFaceBegin_, vertexFaces_;  ///< faces around each 3-D vertex (CSR)
+  /// n x 1 blocks for SystemSolver: impulse b (and b with Dirichlet rows zeroed), Neumann and
+  /// Dirichlet diffusions, the heat u used for the gradient, divergence, potential y.
+  Eigen::MatrixXd impulse_, impulseDirichlet_, u_, uDirichlet_, heat_, divergence_, y_;
+  Eigen::VectorXd distances_;
+  SolveReport diffusionReport_, distanceReport_;
+  GeodesicTimings timings_;
+  bool heatSettled_ = false;  ///< update() no longer cycles on the heat
+  double heatResidual_ = std::numeric_limits<double>::infinity();  ///< of the last heat update
+  bool heatChanged_ = true;  ///< u changed since the divergence was last computed
+};
+
+GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& options)
     : domain_(&domain),
       options_([&] {
         options.validate();
@@ -112,10 +169,13 @@ GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions&
   const double area = ops.report().metric.surfaceArea;
   if (!(area > 0.0)) throw InvalidInputError("the mesh has zero surface area; no distances exist");
   scale_ = std::sqrt(area);
-  gradients_ = std::make_unique<Gradients>(domain, options_.solver.multigrid.threads);
+  gradients_ = std::make_unique<GeodesicGradients>(domain, options_.solver.multigrid.threads);
   // A1 and A2 live in their solvers only (SystemSolver::matrix()).
   diffusionSolver_.initAndUpdate(options_.alpha * ops.mass() + ops.stiffness());
-  distanceSolver_.initAndUpdate(ops.stiffness() + kDistanceScreening * ops.mass());
+  // The cut-cell ghost penalty keeps barely covered texels from amplifying the inconsistency
+  // of the normalised gradient (see Gradients::stabiliser).
+  distanceSolver_.initAndUpdate(ops.stiffness() + kDistanceScreening * ops.mass() +
+                                gradients_->stabiliser(domain.unknowns()));
   labelComponents();
   if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
     buildDirichlet();
@@ -136,11 +196,7 @@ GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions&
   timings_.setup = secondsSince(start);
 }
 
-GeodesicSolver::~GeodesicSolver() = default;
-GeodesicSolver::GeodesicSolver(GeodesicSolver&&) noexcept = default;
-GeodesicSolver& GeodesicSolver::operator=(GeodesicSolver&&) noexcept = default;
-
-void GeodesicSolver::buildDirichlet() {
+void GeodesicSolver::Impl::buildDirichlet() {
   const TexelGrid& grid = domain_->grid();
   const fem::TexelBasis& basis = domain_->operators().basis();
   dirichlet_.assign(static_cast<size_t>(domain_->unknowns()), 0);
@@ -168,7 +224,7 @@ void GeodesicSolver::buildDirichlet() {
   updateDirichlet();
 }
 
-void GeodesicSolver::updateDirichlet() {
+void GeodesicSolver::Impl::updateDirichlet() {
   // A1 with the rows and columns of held texels reduced to their diagonal: same pattern, SPD.
   Eigen::SparseMatrix<double> a = diffusionSolver_.matrix();
   for (int j = 0; j < a.outerSize(); ++j)
@@ -179,7 +235,7 @@ void GeodesicSolver::updateDirichlet() {
   dirichletSolver_->update(std::move(a));
 }
 
-void GeodesicSolver::resetIterates() {
+void GeodesicSolver::Impl::resetIterates() {
   const int n = domain_->unknowns();
   heatSettled_ = false;
   heatResidual_ = std::numeric_limits<double>::infinity();
@@ -192,7 +248,7 @@ void GeodesicSolver::resetIterates() {
   distances_ = Eigen::VectorXd::Zero(n);
 }
 
-void GeodesicSolver::setAlpha(double alpha) {
+void GeodesicSolver::Impl::setAlpha(double alpha) {
   GeodesicOptions next = options_;
   next.alpha = alpha;
   next.validate();
@@ -203,14 +259,19 @@ void GeodesicSolver::setAlpha(double alpha) {
   resetIterates();
 }
 
-void GeodesicSolver::setSources(std::span<const GeodesicSource> sources) {
+void GeodesicSolver::Impl::setSources(std::span<const GeodesicSource> sources) {
   if (sources.empty()) throw InvalidInputError("geodesic distances need at least one source");
   std::vector<ResolvedSource> resolved;
   std::vector<std::vector<fem::TexelWeight>> weights;
   Eigen::MatrixXd impulse = Eigen::MatrixXd::Zero(domain_->unknowns(), 1);
   for (const GeodesicSource& source : sources) {
     resolved.push_back(resolveSource(*domain_, source));
-    weights.push_back(domain_->operators().basis().evaluate(resolved.back().point));
+    // A unit impulse on every sheet through the source: at a non-manifold vertex the sheets
+    // share no texel, and heat put on one of them would never reach the others.
+    weights.emplace_back();
+    for (const fem::SurfacePoint& sheet : resolved.back().sheets)
+      for (const fem::TexelWeight& w : domain_->operators().basis().evaluate(sheet))
+        weights.back().push_back(w);
     if (weights.back().empty())
       throw InvalidInputError("no texel basis function covers the source at UV (" +
                               std::to_string(resolved.back().uv.x()) + ", " +
@@ -228,7 +289,7 @@ void GeodesicSolver::setSources(std::span<const GeodesicSource> sources) {
   resetIterates();
 }
 
-void GeodesicSolver::labelComponents() {
+void GeodesicSolver::Impl::labelComponents() {
   const Eigen::SparseMatrix<double>& a1 = diffusionSolver_.matrix();
   const int n = static_cast<int>(a1.outerSize());
   component_.assign(static_cast<size_t>(n), -1);
@@ -250,7 +311,7 @@ void GeodesicSolver::labelComponents() {
   }
 }
 
-void GeodesicSolver::findReachable() {
+void GeodesicSolver::Impl::findReachable() {
   std::vector<uint8_t> reached(static_cast<size_t>(componentCount_), 0);
   for (const auto& weights : sourceWeights_)
     for (const fem::TexelWeight& w : weights)
@@ -260,7 +321,7 @@ void GeodesicSolver::findReachable() {
     reachable_[u] = reached[static_cast<size_t>(component_[u])];
 }
 
-void GeodesicSolver::collectNearField() {
+void GeodesicSolver::Impl::collectNearField() {
   nearField_.clear();
   if (options_.offset != GeodesicOffset::NearField) return;
   const TexturedMesh& mesh = domain_->mesh();
@@ -356,37 +417,57 @@ void GeodesicSolver::collectNearField() {
       [](const NearFieldTexel& a, const NearFieldTexel& b) { return a.source < b.source; });
 }
 
-double GeodesicSolver::offset() const {
-  // Per source: median of y - chord over its near-field texels (the median shrugs off texels
-  // across a crease, where chord < geodesic), else the value at the source; then the mean.
-  double total = 0.0;
-  std::vector<double> differences;
+std::vector<double> GeodesicSolver::Impl::offsets() const {
+  // Each component of A2's support graph has its own constant. Per source and component: median
+  // of y - chord over its near-field texels there (the median shrugs off texels across a crease,
+  // where chord < geodesic), else the value at the source; then the mean over the sources.
+  std::vector<double> total(static_cast<size_t>(componentCount_), 0.0);
+  std::vector<int> count(static_cast<size_t>(componentCount_), 0);
+  std::vector<std::pair<int32_t, double>> differences;  // (component, y - chord)
+  std::vector<double> value, weight, group;
   auto texel = nearField_.begin();
   for (size_t s = 0; s < sources_.size(); ++s) {
     differences.clear();
     for (; texel != nearField_.end() && texel->source == static_cast<int32_t>(s); ++texel)
-      differences.push_back(y_(texel->unknown, 0) - texel->distance);
-    if (static_cast<int>(differences.size()) >= kMinNearFieldTexels) {
-      const auto middle = differences.begin() + static_cast<std::ptrdiff_t>(differences.size() / 2);
-      std::nth_element(differences.begin(), middle, differences.end());
-      total += *middle;
-      continue;
+      differences.emplace_back(component_[static_cast<size_t>(texel->unknown)],
+                               y_(texel->unknown, 0) - texel->distance);
+    std::sort(differences.begin(), differences.end());
+    value.assign(total.size(), 0.0);
+    weight.assign(total.size(), 0.0);
+    for (const fem::TexelWeight& w : sourceWeights_[s]) {
+      const auto c = static_cast<size_t>(component_[static_cast<size_t>(w.unknown)]);
+      value[c] += w.weight * y_(w.unknown, 0);
+      weight[c] += w.weight;
     }
-    for (const fem::TexelWeight& w : sourceWeights_[s]) total += w.weight * y_(w.unknown, 0);
+    for (size_t c = 0; c < total.size(); ++c) {
+      if (!(weight[c] > 0.0)) continue;
+      const auto lo = std::lower_bound(differences.begin(), differences.end(),
+                                       std::make_pair(static_cast<int32_t>(c), -kInfinity));
+      const auto hi = std::lower_bound(lo, differences.end(),
+                                       std::make_pair(static_cast<int32_t>(c + 1), -kInfinity));
+      group.clear();
+      for (auto it = lo; it != hi; ++it) group.push_back(it->second);
+      if (static_cast<int>(group.size()) >= kMinNearFieldTexels) {
+        const auto middle = group.begin() + static_cast<std::ptrdiff_t>(group.size() / 2);
+        std::nth_element(group.begin(), middle, group.end());
+        total[c] += *middle;
+      } else {
+        total[c] += value[c] / weight[c];
+      }
+      ++count[c];
+    }
   }
-  return total / static_cast<double>(sources_.size());
+  for (size_t c = 0; c < total.size(); ++c)
+    if (count[c] > 0) total[c] /= count[c];
+  return total;
 }
 
-void GeodesicSolver::setSource(const GeodesicSource& source) {
-  setSources({&source, 1});
-}
-
-void GeodesicSolver::requireSources() const {
+void GeodesicSolver::Impl::requireSources() const {
   if (sources_.empty())
     throw InvalidInputError("GeodesicSolver: call setSources before update or solve");
 }
 
-void GeodesicSolver::diffusionStep(bool full) {
+void GeodesicSolver::Impl::diffusionStep(bool full) {
   const auto start = Clock::now();
   timings_.diffusion = 0.0;
   if (!full && heatSettled_) return;  // u, and so the divergence, stay as they are
@@ -409,7 +490,7 @@ void GeodesicSolver::diffusionStep(bool full) {
   timings_.diffusion = secondsSince(start);
 }
 
-void GeodesicSolver::distanceStep(bool full) {
+void GeodesicSolver::Impl::distanceStep(bool full) {
   auto start = Clock::now();
   if (heatChanged_) {
     gradients_->divergence(diffused().data(), divergence_.data(), divergence_.rows());
@@ -422,28 +503,27 @@ void GeodesicSolver::distanceStep(bool full) {
   // y moves by its offset every time, so its constant part stays the size of the distances. With
   // float V-cycles (refine), S's float rounding perturbs its null space (the constants) by far
   // more than eps M: a drifting constant in y would leak into the distances.
-  const double shift = offset();
-  const double infinity = std::numeric_limits<double>::infinity();
+  const std::vector<double> shift = offsets();
   gradients_->arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, y_.rows(), kGeodesicUnknownsPerTask),
-                      [&](const tbb::blocked_range<Eigen::Index>& range) {
-                        for (Eigen::Index u = range.begin(); u != range.end(); ++u) {
-                          y_(u, 0) -= shift;
-                          distances_[u] =
-                              reachable_[static_cast<size_t>(u)] ? y_(u, 0) * scale_ : infinity;
-                        }
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<Eigen::Index>(0, y_.rows(), kGeodesicUnknownsPerTask),
+        [&](const tbb::blocked_range<Eigen::Index>& range) {
+          for (Eigen::Index u = range.begin(); u != range.end(); ++u) {
+            y_(u, 0) -= shift[static_cast<size_t>(component_[static_cast<size_t>(u)])];
+            distances_[u] = reachable_[static_cast<size_t>(u)] ? y_(u, 0) * scale_ : kInfinity;
+          }
+        });
   });
   timings_.distance = secondsSince(start);
 }
 
-void GeodesicSolver::update() {
+void GeodesicSolver::Impl::update() {
   requireSources();
   diffusionStep(false);
   distanceStep(false);
 }
 
-double GeodesicSolver::residual() const {
+double GeodesicSolver::Impl::residual() const {
   requireSources();
   double worst = diffusionSolver_.relativeResidual(impulse_, u_);
   if (dirichletSolver_)
@@ -451,10 +531,68 @@ double GeodesicSolver::residual() const {
   return std::max(worst, distanceSolver_.relativeResidual(divergence_, y_));
 }
 
-void GeodesicSolver::solve() {
+void GeodesicSolver::Impl::solve() {
   requireSources();
   diffusionStep(true);
   distanceStep(true);
+}
+
+GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options)
+    : impl_(std::make_unique<Impl>(domain, options)) {}
+GeodesicSolver::~GeodesicSolver() = default;
+GeodesicSolver::GeodesicSolver(GeodesicSolver&&) noexcept = default;
+GeodesicSolver& GeodesicSolver::operator=(GeodesicSolver&&) noexcept = default;
+
+void GeodesicSolver::setAlpha(double alpha) {
+  impl_->setAlpha(alpha);
+}
+void GeodesicSolver::setSources(std::span<const GeodesicSource> sources) {
+  impl_->setSources(sources);
+}
+void GeodesicSolver::setSource(const GeodesicSource& source) {
+  impl_->setSources({&source, 1});
+}
+void GeodesicSolver::update() {
+  impl_->update();
+}
+bool GeodesicSolver::heatSettled() const {
+  return impl_->heatSettled_;
+}
+double GeodesicSolver::residual() const {
+  return impl_->residual();
+}
+void GeodesicSolver::solve() {
+  impl_->solve();
+}
+const Eigen::VectorXd& GeodesicSolver::distances() const {
+  return impl_->distances_;
+}
+const Eigen::MatrixXd& GeodesicSolver::diffused() const {
+  return impl_->diffused();
+}
+const std::vector<uint8_t>& GeodesicSolver::reachable() const {
+  return impl_->reachable_;
+}
+int GeodesicSolver::dirichletTexels() const {
+  return impl_->dirichletCount_;
+}
+double GeodesicSolver::unitScale() const {
+  return impl_->scale_;
+}
+const std::vector<ResolvedSource>& GeodesicSolver::sources() const {
+  return impl_->sources_;
+}
+const SolveReport& GeodesicSolver::diffusionReport() const {
+  return impl_->diffusionReport_;
+}
+const SolveReport& GeodesicSolver::distanceReport() const {
+  return impl_->distanceReport_;
+}
+const GeodesicTimings& GeodesicSolver::timings() const {
+  return impl_->timings_;
+}
+const GeodesicOptions& GeodesicSolver::options() const {
+  return impl_->options_;
 }
 
 GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,

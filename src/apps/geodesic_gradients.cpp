@@ -20,15 +20,25 @@ namespace {
 /// threads).
 constexpr int kFacesPerTask = 64;
 
+/// Stiffness given to the twist mode of a cut cell's uncovered part, as a fraction of the twist
+/// stiffness of a covered cell: 1 fills the cell. The analytic tests barely move (sphere at 256²:
+/// mean error 3.17e-4 -> 3.18e-4), while on Lantern at 256² the lowest texel goes from -4.9
+/// times the largest distance to above zero (0.1 still leaves texels at -0.5% of it).
+constexpr double kCutCellStiffening = 1.0;
+/// Energy of the twist mode (1 - 2 fx)(1 - 2 fy) c over a covered cell is twist^2 s / 12 with
+/// twist = 4 c and s = tr(g^-1) sqrt|g| (paper Sec. 5.1 stiffness, bilinear basis).
+constexpr double kTwistEnergy = 1.0 / 12.0;
+
 }  // namespace
 
-GeodesicSolver::Gradients::Gradients(const TexelDomain& domain, int threads)
+GeodesicGradients::GeodesicGradients(const TexelDomain& domain, int threads)
     : arena(threads > 0 ? threads : tbb::task_arena::automatic) {
   arena.execute([&] { build(domain); });
 }
 
-void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
+void GeodesicGradients::build(const TexelDomain& domain) {
   const fem::TexelBasis& basis = domain.operators().basis();
+  const TexelGrid& grid = domain.grid();
   const auto& metric = domain.operators().metric();
   const int faces = basis.faceCount();
   const int chunks = (faces + kFacesPerTask - 1) / kFacesPerTask;
@@ -39,6 +49,7 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
     std::vector<SeamSample> seams;
     std::vector<int32_t> texels;
     std::vector<Eigen::Vector2d> gradients;
+    std::vector<CellCover> covers;
   };
   std::vector<Chunk> out(static_cast<size_t>(chunks));
   tbb::parallel_for(0, chunks, [&](int c) {
@@ -54,6 +65,11 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
       basis.clipFace(f, clip);
       for (const auto& piece : clip.pieces) {
         const auto poly = clip.polygon(piece);
+        const double pieceArea = polygonArea(poly);
+        if (pieceArea > 0.0)
+          chunk.covers.push_back({grid.cellIndex(piece.cellX, piece.cellY),
+                                  domain.atlas().chartOfFace[static_cast<size_t>(f)], pieceArea,
+                                  pieceArea * (h(0, 0) + h(1, 1)) * root});
         if (basis.isPlain(f, poly)) {
           const Eigen::Vector2d origin(piece.cellX, piece.cellY);
           double area = 0.0;
@@ -107,7 +123,9 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
       }
     }
   });
-  const TexelGrid& grid = domain.grid();
+  std::vector<CellCover> covers;
+  for (Chunk& chunk : out) covers.insert(covers.end(), chunk.covers.begin(), chunk.covers.end());
+  collectCutCells(basis, grid, std::move(covers));
   rowBegin.assign(static_cast<size_t>(grid.ny) + 2, 0);
   for (const Chunk& chunk : out)
     for (int32_t row : chunk.cellRows) ++rowBegin[static_cast<size_t>(row) + 2];
@@ -144,6 +162,45 @@ void GeodesicSolver::Gradients::build(const TexelDomain& domain) {
   seamDirections.resize(seams.size());
 }
 
+void GeodesicGradients::collectCutCells(const fem::TexelBasis& basis, const TexelGrid& grid,
+                                        std::vector<CellCover> covers) {
+  std::sort(covers.begin(), covers.end(), [](const CellCover& a, const CellCover& b) {
+    return a.cell != b.cell ? a.cell < b.cell : a.chart < b.chart;
+  });
+  cutCells.clear();
+  for (size_t begin = 0, end = 0; begin < covers.size(); begin = end) {
+    double area = 0.0, stiffness = 0.0;
+    bool oneChart = true;
+    for (end = begin; end < covers.size() && covers[end].cell == covers[begin].cell; ++end) {
+      oneChart = oneChart && covers[end].chart == covers[begin].chart;
+      area += covers[end].area;
+      stiffness += covers[end].stiffness;
+    }
+    // A cell shared by two charts holds texels of both: a plane through them means nothing.
+    if (!oneChart || area >= 1.0) continue;
+    const int32_t cell = covers[begin].cell;
+    const int a = cell % (grid.nx + 1) - 1, b = cell / (grid.nx + 1) - 1;
+    const std::array<int32_t, 4> texels = basis.cellTexels(a, b);
+    if (*std::min_element(texels.begin(), texels.end()) < 0) continue;
+    // The uncovered part takes the mean tr(g^-1) sqrt|g| of the faces that cover the cell.
+    cutCells.push_back(
+        {texels, kCutCellStiffening * kTwistEnergy * (1.0 - area) * stiffness / area});
+  }
+}
+
+Eigen::SparseMatrix<double> GeodesicGradients::stabiliser(Eigen::Index n) const {
+  constexpr std::array<double, 4> kTwist{1.0, -1.0, -1.0, 1.0};
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(16 * cutCells.size());
+  for (const CutCell& c : cutCells)
+    for (size_t i = 0; i < 4; ++i)
+      for (size_t j = 0; j < 4; ++j)
+        entries.emplace_back(c.texels[i], c.texels[j], c.weight * kTwist[i] * kTwist[j]);
+  Eigen::SparseMatrix<double> g(n, n);
+  g.setFromTriplets(entries.begin(), entries.end());
+  return g;
+}
+
 namespace {
 
 /// X = -g^-1 du / |du|_{g^-1} (unit in g) times `weight`: the direction of steepest descent of
@@ -159,9 +216,8 @@ inline Eigen::Vector2d descentDirection(double gx, double gy, double hxx, double
 
 }  // namespace
 
-void GeodesicSolver::Gradients::addRowDivergence(const CellSample* first, const CellSample* last,
-                                                 const FaceMetric* metrics, const double* u,
-                                                 double* div) {
+void GeodesicGradients::addRowDivergence(const CellSample* first, const CellSample* last,
+                                         const FaceMetric* metrics, const double* u, double* div) {
   // The samples of one cell row come by column, so the sums for the two texel columns of the
   // current cell stay in registers and each texel is written once per row: adding every sample
   // straight into div chains each addition behind the previous sample's store to that texel.
@@ -200,7 +256,7 @@ void GeodesicSolver::Gradients::addRowDivergence(const CellSample* first, const 
   for (int k = 0; k < 4; ++k) flush(k);
 }
 
-void GeodesicSolver::Gradients::divergence(const double* u, double* div, Eigen::Index n) {
+void GeodesicGradients::divergence(const double* u, double* div, Eigen::Index n) {
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, n, kGeodesicUnknownsPerTask),
                       [&](const tbb::blocked_range<Eigen::Index>& range) {

@@ -5,6 +5,7 @@
 #include <tbb/task_arena.h>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -19,7 +20,7 @@ constexpr Eigen::Index kGeodesicUnknownsPerTask = 1 << 14;
 /// One-point quadrature samples of the texel-basis gradients (paper Sec. 7.3): one per plain
 /// piece T ∩ cell (at its centroid) and one per quadratic element of seam pieces (at its
 /// centroid). div_h(omega)_t = sum_q weight_q dphi_t(q) . X_q with X_q = g^-1 omega_q.
-struct GeodesicSolver::Gradients {
+struct GeodesicGradients {
   /// Piece with exactly bilinear basis: four cell texels, centroid in cell-local coordinates.
   /// Compact (the divergence streams every sample once per update); the metric comes from the
   /// face.
@@ -50,12 +51,33 @@ struct GeodesicSolver::Gradients {
   std::vector<int32_t> seamTargets;             ///< the distinct texels of seamTexels, ascending
   std::vector<int32_t> seamTargetOfEntry;  ///< per seam entry: index of its texel in seamTargets
   std::vector<double> seamSums;            ///< per seam target: sum of the last divergence
+  /// Area of one chart's piece inside one cell, and that area times tr(g^-1) sqrt|g| of its face.
+  struct CellCover {
+    int32_t cell, chart;  ///< TexelGrid::cellIndex, Atlas chart
+    double area, stiffness;
+  };
+  /// Cut cell (covered by one chart, not fully, four active texels) and the weight of its twist
+  /// penalty (see stabiliser()).
+  struct CutCell {
+    std::array<int32_t, 4> texels;  ///< cell texels in CellSample order
+    double weight;
+  };
+  std::vector<CutCell> cutCells;
   tbb::task_arena arena;
 
   /// Samples of `domain`, built and later summed on `threads` threads (0: all).
-  Gradients(const TexelDomain& domain, int threads);
+  GeodesicGradients(const TexelDomain& domain, int threads);
 
   void build(const TexelDomain& domain);
+  /// Fills cutCells from the per-piece covers (cell, chart, area, area * tr(g^-1) sqrt|g|).
+  void collectCutCells(const fem::TexelBasis& basis, const TexelGrid& grid,
+                       std::vector<CellCover> covers);
+  /// Ghost penalty for the distance step (n x n, unit-area surface, PSD, 3 x 3 texel pattern):
+  /// sum over cut cells of weight * (y00 - y10 - y01 + y11)^2. The twist y00 - y10 - y01 + y11
+  /// vanishes on linear functions, so the penalty is consistent; it gives the uncovered part of
+  /// each cut cell the stiffness the twist mode would have if the cell were covered, so a texel
+  /// that its chart barely covers takes the value the plane through its cell extends to.
+  Eigen::SparseMatrix<double> stabiliser(Eigen::Index n) const;
   /// Sets div (n values) to div_h(-du/|du|) of the function with coefficients u (one-point
   /// quadrature).
   void divergence(const double* u, double* div, Eigen::Index n);

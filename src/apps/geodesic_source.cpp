@@ -1,8 +1,10 @@
 // Apps layer: snapping geodesic sources (vertex, UV point, 3-D point) onto the atlas domain M.
 #include "texgrad/apps/geodesic_source.h"
 
+#include <algorithm>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "apps/closest_point.h"
 #include "texgrad/core/error.h"
@@ -15,9 +17,51 @@ fem::SurfacePoint pointAt(const fem::TexelBasis& basis, int face, const Eigen::V
   return {face, b[0] * c[0] + b[1] * c[1] + b[2] * c[2]};
 }
 
+/// One corner per fan of valid faces around `vertex` (faces joined by a 3-D edge through it),
+/// the fan of `face` first.
+std::vector<fem::SurfacePoint> vertexSheets(const TexelDomain& domain, int32_t vertex, int face) {
+  const TexturedMesh& mesh = domain.mesh();
+  const fem::TexelBasis& basis = domain.operators().basis();
+  std::vector<int> faces{face};  // the faces at the vertex, `face` first
+  for (int f = 0; f < basis.faceCount(); ++f)
+    if (f != face && basis.faceValid(f) &&
+        std::find(mesh.triangles[f].begin(), mesh.triangles[f].end(), vertex) !=
+            mesh.triangles[f].end())
+      faces.push_back(f);
+  auto sharesEdge = [&](int f, int g) {  // a 3-D edge (vertex, w) of both faces
+    for (int32_t w : mesh.triangles[f])
+      if (w != vertex && std::find(mesh.triangles[g].begin(), mesh.triangles[g].end(), w) !=
+                             mesh.triangles[g].end())
+        return true;
+    return false;
+  };
+  std::vector<int> fan(faces.size(), -1);
+  std::vector<fem::SurfacePoint> sheets;
+  for (size_t seed = 0; seed < faces.size(); ++seed) {
+    if (fan[seed] >= 0) continue;
+    fan[seed] = static_cast<int>(sheets.size());
+    std::vector<size_t> queue{seed};
+    for (size_t head = 0; head < queue.size(); ++head)
+      for (size_t other = 0; other < faces.size(); ++other)
+        if (fan[other] < 0 && sharesEdge(faces[queue[head]], faces[other])) {
+          fan[other] = fan[seed];
+          queue.push_back(other);
+        }
+    const auto& t = mesh.triangles[static_cast<size_t>(faces[seed])];
+    const auto corner = std::find(t.begin(), t.end(), vertex) - t.begin();
+    sheets.push_back({faces[seed], basis.faceCorners(faces[seed])[static_cast<size_t>(corner)]});
+  }
+  return sheets;
+}
+
 ResolvedSource finish(const TexelDomain& domain, const fem::SurfacePoint& point, double snap) {
   const fem::TexelBasis& basis = domain.operators().basis();
-  return {point, domain.grid().toUv(point.grid), basis.position(point), snap};
+  ResolvedSource r{point, domain.grid().toUv(point.grid), basis.position(point), snap, {point}};
+  // Snapping puts a point that lands on a corner exactly there.
+  for (size_t c = 0; c < 3; ++c)
+    if (point.grid == basis.faceCorners(point.face)[c])  // on a mesh vertex: every sheet there
+      r.sheets = vertexSheets(domain, domain.mesh().triangles[point.face][c], point.face);
+  return r;
 }
 
 ResolvedSource resolveVertex(const TexelDomain& domain, int64_t vertex) {

@@ -15,9 +15,11 @@ float sampleBilinearTexel(const Image& image, const Eigen::Vector2d& p, int chan
     y = std::clamp(y, 0, image.height - 1);
     return static_cast<double>(image.at(x, y, channel));
   };
-  const double bottom = (1 - tx) * texel(x0, y0) + tx * texel(x0 + 1, y0);
-  const double top = (1 - tx) * texel(x0, y0 + 1) + tx * texel(x0 + 1, y0 + 1);
-  return static_cast<float>((1 - ty) * bottom + ty * top);
+  // A texel of weight 0 is not read: 0 * inf would turn a lookup next to an infinite texel (an
+  // unreachable geodesic distance) into NaN although the texel does not contribute.
+  auto mix = [](double a, double b, double t) { return t == 0.0 ? a : (1 - t) * a + t * b; };
+  auto row = [&](int y) { return mix(texel(x0, y), texel(x0 + 1, y), tx); };
+  return static_cast<float>(mix(row(y0), row(y0 + 1), ty));
 }
 
 }  // namespace texgrad

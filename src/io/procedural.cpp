@@ -20,6 +20,8 @@ namespace {
 constexpr double kMargin = 0.03;
 /// Radius of the cylinder: circumference 1, so arc length along the cut equals height.
 constexpr double kCylinderRadius = 0.5 / std::numbers::pi;
+/// Sine of the cones' half angle: 1/2 unrolls each cone to a half disc.
+constexpr double kConeSine = 0.5;
 /// Torus radii (centre circle and tube) and its grid: charts around the centre circle and tube.
 constexpr double kTorusMajor = 1.0;
 constexpr double kTorusMinor = 0.4;
@@ -210,6 +212,57 @@ TexturedMesh cubeSphere(int subdivisions) {
     return Eigen::Vector3d(2.0 * k[0] / n - 1.0, 2.0 * k[1] / n - 1.0, 2.0 * k[2] / n - 1.0)
         .normalized();
   });
+}
+
+TexturedMesh twoCones(int around, int rings) {
+  requireAtLeast("cone segments around", around, 3);
+  requireAtLeast("cone rings", rings, 1);
+  // Each cone is cut along its generator at angle 0 and unrolled isometrically about the apex:
+  // generator i at angle i * beta, beta the apex angle of one facet, so every face (planar,
+  // spanned by two generators) keeps its shape. Cone 0 opens towards +z, cone 1 towards -z.
+  const double halfAngle = std::asin(kConeSine);
+  const double beta = 2.0 * std::asin(kConeSine * std::sin(std::numbers::pi / around));
+  // UV radius of a sector (slant 1): two half discs (around * beta < pi) stacked in v.
+  const double uvRadius = 0.5 - 2.0 * kMargin;
+  TexturedMesh mesh;
+  mesh.positions.emplace_back(0.0, 0.0, 0.0);  // the shared apex
+  for (int cone = 0; cone < 2; ++cone) {
+    const double up = cone == 0 ? 1.0 : -1.0;
+    const auto first = static_cast<int32_t>(mesh.positions.size());
+    for (int k = 1; k <= rings; ++k)
+      for (int i = 0; i < around; ++i) {
+        const double theta = 2.0 * std::numbers::pi * i / around, s = double(k) / rings;
+        mesh.positions.emplace_back(s * kConeSine * std::cos(theta),
+                                    s * kConeSine * std::sin(theta), up * s * std::cos(halfAngle));
+      }
+    auto vertex = [&](int k, int i) { return k == 0 ? 0 : first + (k - 1) * around + i % around; };
+    const Eigen::Vector2d apexUv(0.5, kMargin + cone * (uvRadius + 2.0 * kMargin));
+    const auto uvFirst = static_cast<int32_t>(mesh.uvs.size());
+    mesh.uvs.push_back(apexUv);
+    for (int k = 1; k <= rings; ++k)
+      for (int i = 0; i <= around; ++i) {
+        const double angle = i * beta, r = uvRadius * k / rings;
+        mesh.uvs.push_back(apexUv + r * Eigen::Vector2d(std::cos(angle), std::sin(angle)));
+      }
+    auto uv = [&](int k, int i) {
+      return k == 0 ? uvFirst : uvFirst + 1 + (k - 1) * (around + 1) + i;
+    };
+    auto add = [&](std::array<std::array<int, 2>, 3> corners) {
+      mesh.triangles.push_back({vertex(corners[0][0], corners[0][1]),
+                                vertex(corners[1][0], corners[1][1]),
+                                vertex(corners[2][0], corners[2][1])});
+      mesh.uvTriangles.push_back({uv(corners[0][0], corners[0][1]),
+                                  uv(corners[1][0], corners[1][1]),
+                                  uv(corners[2][0], corners[2][1])});
+    };
+    for (int i = 0; i < around; ++i) add({{{0, 0}, {1, i}, {1, i + 1}}});
+    for (int k = 1; k < rings; ++k)
+      for (int i = 0; i < around; ++i) {
+        add({{{k, i}, {k + 1, i}, {k + 1, i + 1}}});
+        add({{{k, i}, {k + 1, i + 1}, {k, i + 1}}});
+      }
+  }
+  return mesh;
 }
 
 TexturedMesh sampleTorus() {

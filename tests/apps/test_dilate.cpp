@@ -2,12 +2,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 
 #include "texgrad/apps/dilate.h"
 #include "texgrad/atlas/atlas.h"
 #include "texgrad/atlas/texel_grid.h"
+#include "texgrad/io/image_sampling.h"
 #include "texgrad/io/procedural.h"
 
 namespace texgrad {
@@ -64,7 +66,8 @@ TEST(Dilate, RadiusLimitsTheRings) {
       int best = 1 << 20;
       for (int y = std::max(0, j - 4); y <= std::min(input.height - 1, j + 4); ++y)
         for (int x = std::max(0, i - 4); x <= std::min(input.width - 1, i + 4); ++x)
-          if (input.at(x, y) != kBackground) best = std::min(best, std::max(std::abs(x - i), std::abs(y - j)));
+          if (input.at(x, y) != kBackground)
+            best = std::min(best, std::max(std::abs(x - i), std::abs(y - j)));
       if (best <= 2)
         EXPECT_NE(out.at(i, j), kBackground) << i << "," << j;
       else
@@ -86,7 +89,9 @@ TEST(Dilate, FirstRingContinuesAcrossTheCylinderSeam) {
   const Eigen::Vector2d ub = mesh.uvs[mesh.uvTriangles[seam.b.face][seam.b.corner]];
   const int axis = std::abs(ua.x() - ub.x()) > std::abs(ua.y() - ub.y()) ? 0 : 1;
   const double period = hi[axis] - lo[axis];
-  auto periodic = [&](double u) { return 0.5 + 0.5 * std::sin(2 * std::numbers::pi * (u - lo[axis]) / period); };
+  auto periodic = [&](double u) {
+    return 0.5 + 0.5 * std::sin(2 * std::numbers::pi * (u - lo[axis]) / period);
+  };
   Image input(size, size, 1, PixelFormat::Float);
   std::fill(input.pixels.begin(), input.pixels.end(), kBackground);
   for (int y = 0; y < grid.ny; ++y)
@@ -112,6 +117,26 @@ TEST(Dilate, FirstRingContinuesAcrossTheCylinderSeam) {
       ++checked;
     }
   EXPECT_GT(checked, 50);
+}
+
+TEST(Dilate, InfiniteValuesDoNotTurnIntoNan) {
+  // Unreachable geodesic distances are +inf; a lookup next to one, with weight 0 on it, is exact.
+  Image image(2, 2, 1, PixelFormat::Float);
+  image.pixels = {1.0f, std::numeric_limits<float>::infinity(), 3.0f, 4.0f};
+  EXPECT_EQ(sampleBilinearTexel(image, Eigen::Vector2d(0.0, 0.5), 0), 2.0f);
+  EXPECT_EQ(sampleBilinearTexel(image, Eigen::Vector2d(0.5, 1.0), 0), 3.5f);
+  EXPECT_TRUE(std::isinf(sampleBilinearTexel(image, Eigen::Vector2d(0.5, 0.0), 0)));
+  // Every chart at +inf: the gutters, filled across the seam and ring by ring, are +inf too.
+  const TexturedMesh mesh = procedural::cylinder(64, 8);
+  const Atlas atlas = buildAtlas(mesh);
+  const TexelGrid grid = buildTexelGrid(mesh, atlas, 256, 256);
+  Image input = randomOnActive(grid, 1, 3);
+  for (float& v : input.pixels)
+    if (v != kBackground) v = std::numeric_limits<float>::infinity();
+  const Image out = dilateGutters(mesh, atlas, grid, input);
+  int nan = 0;
+  for (float v : out.pixels) nan += std::isnan(v) ? 1 : 0;
+  EXPECT_EQ(nan, 0);
 }
 
 }  // namespace

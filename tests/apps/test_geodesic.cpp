@@ -7,12 +7,15 @@
 #include <array>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <vector>
 
 #include "shared_meshes.h"
 #include "test_paths.h"
+#include "texgrad/apps/dilate.h"
 #include "texgrad/apps/distance_colour_map.h"
 #include "texgrad/apps/geodesic.h"
+#include "texgrad/apps/texel_signal.h"
 #include "texgrad/atlas/cell_clipping.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/mesh_reader.h"
@@ -343,6 +346,95 @@ TEST(Geodesic, TwoSourcesGiveTheNearerDistance) {
   EXPECT_LE(stats.mean, 0.03);
   // The equator is the farthest set, at pi / 2.
   EXPECT_NEAR(result.maxDistance, std::acos(-1.0) / 2.0, 0.03);
+}
+
+/// Bounding-box diagonal of the mesh (model units): the scale "1e-3 of the diameter" refers to.
+double diameter(const TexturedMesh& mesh) {
+  Eigen::Vector3d lo = mesh.positions.front(), hi = lo;
+  for (const Eigen::Vector3d& p : mesh.positions) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return (hi - lo).norm();
+}
+
+/// Lowest finite distance over the active texels (+infinity if there is none).
+double lowestDistance(const Eigen::VectorXd& distances) {
+  double lowest = std::numeric_limits<double>::infinity();
+  for (double d : distances)
+    if (std::isfinite(d)) lowest = std::min(lowest, d);
+  return lowest;
+}
+
+TEST(Geodesic, TwoConesJoinedAtTheApexMatchTheSlantDistance) {
+  // The cones touch only at the apex, a non-manifold vertex: a source there seeds both sheets,
+  // each is its own component with its own constant, and the distance is the slant |p|.
+  const TexelDomain domain(procedural::twoCones(), 256, 256);
+  const fem::TexelBasis& basis = domain.operators().basis();
+  const double texel = texelSize(domain);
+  for (const GeodesicSource& source :
+       {GeodesicSource::atVertex(0), GeodesicSource::atPoint(Eigen::Vector3d::Zero())}) {
+    const GeodesicResult result = geodesicDistance(domain, {&source, 1}, directOptions());
+    ASSERT_EQ(result.sources[0].sheets.size(), 2u);
+    EXPECT_EQ(result.unreachableTexels, 0);
+    for (const double side : {1.0, -1.0}) {
+      // The other cone's points count as "near the source" and are skipped.
+      const ErrorStats stats =
+          compare(domain, result.distances, 3.0 * texel,
+                  [side](const Eigen::Vector3d& p) { return p.z() * side > 0.0 ? p.norm() : 0.0; });
+      std::cout << "cone " << side << ": mean rel error " << stats.mean << ", max " << stats.max
+                << " over " << stats.samples << " points\n";
+      EXPECT_GT(stats.samples, 1000);
+      EXPECT_LE(stats.mean, 0.01);
+      EXPECT_LE(stats.max, 0.05);
+    }
+    for (const fem::SurfacePoint& sheet : result.sources[0].sheets) {
+      const double atApex = basis.evaluate(sheet, result.distances);
+      std::cout << "distance at the apex on face " << sheet.face << ": " << atApex / texel
+                << " texels\n";
+      EXPECT_LE(std::abs(atApex), 0.5 * texel);
+    }
+  }
+}
+
+TEST(Geodesic, BarelyCoveredTexelsStayNearTheSurfaceDistances) {
+  // The cones' arcs and the source at a chart corner leave cells that their chart barely covers.
+  const TexelDomain domain(procedural::twoCones(), 256, 256);
+  const GeodesicSource source = GeodesicSource::atVertex(0);
+  for (SolverKind kind : {SolverKind::Direct, SolverKind::Multigrid}) {
+    GeodesicOptions options;
+    options.solver.kind = kind;
+    const GeodesicResult result = geodesicDistance(domain, {&source, 1}, options);
+    const double lowest = lowestDistance(result.distances);
+    const double highest = result.distances.maxCoeff();
+    std::cout << toString(kind) << ": distances " << lowest << " .. " << highest
+              << " (largest on M " << result.maxDistance << ")\n";
+    EXPECT_GE(lowest, -1e-3 * diameter(domain.mesh()));
+    EXPECT_LE(highest, result.maxDistance + 2.0 * texelSize(domain));
+  }
+}
+
+TEST(Geodesic, SharedMeshesHaveNoNanAndNoNegativeDistancesSlow) {
+  // The output of `texgrad geodesic MESH --source-vertex 0` at 1024², gutters padded: before the
+  // cut-cell penalty Lantern reached -1.44 (diameter 30.3) at a barely covered texel, and the
+  // padding turned gutters next to unreachable charts into NaN.
+  for (const test::SharedMesh& shared : test::sharedMeshes()) {
+    const TexelDomain domain(readMesh(test::sharedData() / shared.obj), 1024, 1024,
+                             OperatorOptions::assembledOnce());
+    const GeodesicSource source = GeodesicSource::atVertex(0);
+    const GeodesicResult result = geodesicDistance(domain, {&source, 1});
+    const double lowest = lowestDistance(result.distances);
+    std::cout << shared.name << ": lowest distance " << lowest / diameter(domain.mesh())
+              << " of the diameter, largest " << result.maxDistance << "\n";
+    EXPECT_GE(lowest, -1e-3 * diameter(domain.mesh())) << shared.name;
+    Image image(1024, 1024, 1, PixelFormat::Float);
+    scatterTexels(domain.grid(), result.distances, image);
+    const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), image);
+    EXPECT_EQ(std::count_if(padded.pixels.begin(), padded.pixels.end(),
+                            [](float v) { return std::isnan(v); }),
+              0)
+        << shared.name;
+  }
 }
 
 TEST(Geodesic, MultigridUpdatesMatchDirectOnSpotSlow) {

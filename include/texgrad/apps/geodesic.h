@@ -4,7 +4,6 @@
 
 #include <Eigen/Core>
 #include <cstdint>
-#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -13,8 +12,6 @@
 #include "texgrad/apps/geodesic_source.h"
 #include "texgrad/apps/system_solver.h"
 #include "texgrad/apps/texel_domain.h"
-#include "texgrad/fem/texel_basis.h"
-#include "texgrad/io/image.h"
 #include "texgrad/solver/solve_report.h"
 
 namespace texgrad {
@@ -107,13 +104,17 @@ struct GeodesicResult {
 /// Heat-method geodesic distances on one TexelDomain (paper Sec. 7.3).
 ///
 /// init (constructor, once per mesh and resolution): per-element gradient samples of the texel
-/// basis, symbolic and numeric set-up of both systems A1 = alpha M + S and A2 = S + eps M
-/// (eps = kDistanceScreening: S alone is singular), and with GeodesicBoundary::Average on a mesh
-/// with open boundary, A1 with Dirichlet rows. Per source set: b = sum_s phi_t(p_s) (a unit
-/// impulse per source), A1 u = b; X = -grad u / |grad u|_g per element with one-point quadrature;
-/// A2 y = div_h(g X); the constant of y is fixed by GeodesicOptions::offset.
+/// basis, symbolic and numeric set-up of both systems A1 = alpha M + S and A2 = S + eps M + G
+/// (eps = kDistanceScreening: S alone is singular; G a ghost penalty on the twist of cells that
+/// their chart covers only in part, beyond the paper: without it a texel whose basis function
+/// barely meets M takes any value that fits the normalised gradient on its sliver, -1.44 on
+/// Lantern where distances reach 8.6), and with GeodesicBoundary::Average on a mesh with open
+/// boundary, A1 with Dirichlet rows. Per source set: b = sum_s phi_t(p_s) (a unit impulse per
+/// source and per sheet of the surface through it), A1 u = b; X = -grad u / |grad u|_g per
+/// element with one-point quadrature; A2 y = div_h(g X); the constant of y is fixed by
+/// GeodesicOptions::offset in each connected component.
 ///
-/// Units: operators live on the unit-area surface (DESIGN.md Sec. 2); distances() multiplies
+/// Units: operators live on the unit-area surface (paper Sec. 7); distances() multiplies
 /// by unitScale() = sqrt(3-D area of M) so every distance it returns is in model units.
 /// Texels with no path of coupled texels (the support graph of S, which crosses seams) to a
 /// source lie on a part of the surface no source reaches: their distance is +infinity.
@@ -153,7 +154,7 @@ class GeodesicSolver {
   void update();
   /// True once update() has stopped cycling on the heat (see update()); false after
   /// setSources, setAlpha and until then.
-  bool heatSettled() const { return heatSettled_; }
+  bool heatSettled() const;
   /// Largest relative residual ||b - A x|| / ||b|| (double) of the current heat and distance
   /// iterates; one sparse product per system, so displays ask for it a few times a second.
   double residual() const;
@@ -162,71 +163,29 @@ class GeodesicSolver {
 
   /// Current distances per unknown, model units (see GeodesicOffset for the value at sources);
   /// +infinity on parts of the surface not connected to a source.
-  const Eigen::VectorXd& distances() const { return distances_; }
+  const Eigen::VectorXd& distances() const;
   /// Current diffused impulse u per unknown (Eq. 5, unit-area surface; n x 1); the mean of the
   /// Neumann and Dirichlet diffusions when those are averaged.
-  const Eigen::MatrixXd& diffused() const { return dirichletSolver_ ? heat_ : u_; }
+  const Eigen::MatrixXd& diffused() const;
   /// Per unknown: 1 if connected to a source (finite distance), else 0.
-  const std::vector<uint8_t>& reachable() const { return reachable_; }
+  const std::vector<uint8_t>& reachable() const;
   /// Number of unknowns held at zero by the Dirichlet diffusion (0 when it is not used).
-  int dirichletTexels() const { return dirichletCount_; }
+  int dirichletTexels() const;
   /// Factor from unit-area-surface lengths to model units: sqrt of the 3-D area of M.
-  double unitScale() const { return scale_; }
+  double unitScale() const;
   /// Sources as snapped onto M.
-  const std::vector<ResolvedSource>& sources() const { return sources_; }
+  const std::vector<ResolvedSource>& sources() const;
   /// Reports of the last diffusion and distance solve (or update).
-  const SolveReport& diffusionReport() const { return diffusionReport_; }
-  const SolveReport& distanceReport() const { return distanceReport_; }
+  const SolveReport& diffusionReport() const;
+  const SolveReport& distanceReport() const;
   /// Stage timings; setup is the constructor's, the others are of the last solve() or update().
-  const GeodesicTimings& timings() const { return timings_; }
+  const GeodesicTimings& timings() const;
   /// Options in use.
-  const GeodesicOptions& options() const { return options_; }
+  const GeodesicOptions& options() const;
 
  private:
-  struct Gradients;
-  /// Interior texel near a source with its chord distance (unit-area units), for NearField.
-  struct NearFieldTexel {
-    int32_t unknown = -1;
-    int32_t source = -1;
-    double distance = 0.0;
-  };
-  void collectNearField();
-  /// Labels the connected components of the support graph of A1 (component_).
-  void labelComponents();
-  /// Marks the unknowns in a component that holds a source (reachable_).
-  void findReachable();
-  void buildDirichlet();
-  void updateDirichlet();
-  double offset() const;
-  void requireSources() const;
-  void resetIterates();
-  void diffusionStep(bool full);
-  void distanceStep(bool full);
-
-  const TexelDomain* domain_;
-  GeodesicOptions options_;
-  double scale_ = 1.0;
-  std::unique_ptr<Gradients> gradients_;
-  SystemSolver diffusionSolver_, distanceSolver_;
-  std::unique_ptr<SystemSolver> dirichletSolver_;  ///< only with Average on meshes with boundary
-  std::vector<uint8_t> dirichlet_;  ///< per unknown: held at zero in the Dirichlet diffusion
-  int dirichletCount_ = 0;
-  std::vector<ResolvedSource> sources_;
-  std::vector<std::vector<fem::TexelWeight>> sourceWeights_;  ///< phi_t(p_s) per source
-  std::vector<NearFieldTexel> nearField_;                     ///< sorted by source
-  std::vector<uint8_t> reachable_;  ///< per unknown: connected to a source
-  std::vector<int32_t> component_;  ///< per unknown: its component of A1's support graph
-  int32_t componentCount_ = 0;
-  std::vector<int32_t> vertexFaceBegin_, vertexFaces_;  ///< faces around each 3-D vertex (CSR)
-  /// n x 1 blocks for SystemSolver: impulse b (and b with Dirichlet rows zeroed), Neumann and
-  /// Dirichlet diffusions, the heat u used for the gradient, divergence, potential y.
-  Eigen::MatrixXd impulse_, impulseDirichlet_, u_, uDirichlet_, heat_, divergence_, y_;
-  Eigen::VectorXd distances_;
-  SolveReport diffusionReport_, distanceReport_;
-  GeodesicTimings timings_;
-  bool heatSettled_ = false;  ///< update() no longer cycles on the heat
-  double heatResidual_ = std::numeric_limits<double>::infinity();  ///< of the last heat update
-  bool heatChanged_ = true;  ///< u changed since the divergence was last computed
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 /// One-shot heat-method distances from `sources` (at least one): GeodesicSolver + solve(), plus

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <vector>
 
 #include "texgrad/apps/texel_domain.h"
 #include "texgrad/fem/texel_basis.h"
@@ -31,11 +32,17 @@ struct ResolvedSource {
   /// How far the request was moved to reach M: UV units for UV sources, model units for 3-D
   /// points, 0 for vertices.
   double snapDistance = 0.0;
+  /// The point on every sheet of the surface that meets there: one corner per fan of faces
+  /// (faces joined by 3-D edges through the vertex) around a source at a mesh vertex, which
+  /// is more than one at a non-manifold vertex (two cones touching at the apex); {point}
+  /// elsewhere. The seam-continuous basis needs only one corner per fan.
+  std::vector<fem::SurfacePoint> sheets;
 };
 
 /// Snaps a source to the nearest point of M (faces with zero UV area are not part of M): a vertex
 /// to one of its corners, a UV point to the nearest point of a UV triangle, a 3-D point to the
-/// nearest point of a 3-D triangle. Throws InvalidInputError for a vertex index out of range or a
+/// nearest point of a 3-D triangle; a source that lands on a mesh vertex gets one point per sheet
+/// there (ResolvedSource::sheets). Throws InvalidInputError for a vertex index out of range or a
 /// vertex that only touches UV-degenerate faces.
 ResolvedSource resolveSource(const TexelDomain& domain, const GeodesicSource& source);
 

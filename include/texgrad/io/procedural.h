@@ -17,6 +17,11 @@ TexturedMesh cube(int subdivisions = 4);
 TexturedMesh cylinder(int around = 32, int along = 16);
 /// Unit sphere as a projected cube: 6 charts in a 3x2 atlas with gutters (the geodesic fixture).
 TexturedMesh cubeSphere(int subdivisions = 16);
+/// Two cones (half angle 30 degrees, slant 1, `around` facets, `rings` rings) joined only at
+/// their common apex, a non-manifold vertex (index 0): cone 0 opens towards +z, cone 1 towards
+/// -z. Each is one chart, cut along one generator (one seam) and unrolled isometrically to a
+/// half disc about its apex, so the geodesic distance from the apex is |p| on both cones.
+TexturedMesh twoCones(int around = 32, int rings = 8);
 /// Torus with several charts and gutters: the built-in sample for the demo command.
 TexturedMesh sampleTorus();
 /// A colourful procedural texture for the sample (asymmetric so flips and seams show).
