@@ -34,6 +34,7 @@ void runSeams(const SeamsArgs& args) {
     printJson({{"command", "seams"},
                {"texels", domain.unknowns()},
                {"free_texels", result.freeTexels},
+               {"unanchored_texels", result.unanchoredTexels},
                {"seam_jump_before", before.rms},
                {"seam_jump_after", after.rms},
                {"stages", timer.json()},
@@ -47,9 +48,13 @@ void addSeamsCommand(CLI::App& app) {
   auto args = std::make_shared<SeamsArgs>();
   CLI::App* cmd = app.add_subcommand(
       "seams",
-      "Hide texture seams: replace the texels along chart boundaries (or under --mask) by the "
-      "smoothest values that agree with all other texels (a Dirichlet problem in the "
-      "seam-continuous texel space). Other texels are unchanged bit for bit.");
+      "Hide texture seams: replace the texels whose footprint a chart boundary crosses (or the "
+      "texels under --mask) by the smoothest values that agree with all other texels (a "
+      "Dirichlet problem in the seam-continuous texel space). Texels under stacked or mirrored "
+      "charts away from their boundaries are kept; so are groups of texels with no other texel "
+      "to agree with (a chart too thin for an interior texel and not joined by seams to one that "
+      "has them; --json counts them as unanchored_texels). Other texels are unchanged bit for "
+      "bit.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   cmd->add_option("texture", args->texture, "Texture (default: the mesh's --texture-slot texture)");
