@@ -10,11 +10,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <csignal>
 #include <fstream>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "test_paths.h"
 #include "texgrad/io/image_io.h"
