@@ -1,4 +1,6 @@
 // `texgrad seams`: re-solve the texels along chart boundaries for the smoothest values.
+#include <iostream>
+
 #include "cli_common.h"
 #include "commands.h"
 #include "texgrad/apps/seams.h"
@@ -25,6 +27,10 @@ void runSeams(const SeamsArgs& args) {
   timer.lap("operators");
   const SeamsResult result = smoothSeams(domain, texture, mask);
   timer.lap("solve");
+  if (result.unanchoredTexels > 0 && !args.report.quiet)
+    std::cerr << "texgrad: note: " << result.unanchoredTexels
+              << " texels kept as they are: no fixed texel ties them to the rest (charts too "
+                 "thin for an interior texel at this resolution, or a mask over whole charts)\n";
   writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth);
   timer.lap("write");
   if (args.report.timings) timer.print();
