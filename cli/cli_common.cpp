@@ -6,6 +6,7 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <new>
@@ -14,6 +15,7 @@
 #include <utility>
 
 #include "texgrad/core/error.h"
+#include "texgrad/io/atomic_file.h"
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/mesh_texture.h"
@@ -142,6 +144,31 @@ ProgressCallback terminalProgress(bool enabled) {
     std::fflush(stderr);
     return true;
   };
+}
+
+namespace {
+
+/// SIGINT/SIGTERM/SIGHUP: delete the outputs being written, then die of the same signal.
+/// SA_RESETHAND has restored the default action, which runs when the handler returns (the
+/// signal is blocked inside it) or at once; so the exit status still says "killed by sig".
+extern "C" void removeTemporariesAndReraise(int sig) {
+  removePendingTemporaries();
+  ::raise(sig);
+}
+
+}  // namespace
+
+void installInterruptCleanup() {
+  struct sigaction action {};
+  action.sa_handler = removeTemporariesAndReraise;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESETHAND;
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old {};
+    // A signal the parent set to be ignored (`nohup`, background jobs) stays ignored.
+    if (::sigaction(sig, nullptr, &old) == 0 && old.sa_handler != SIG_IGN)
+      ::sigaction(sig, &action, nullptr);
+  }
 }
 
 int runGuarded(const std::function<void()>& body) {

@@ -41,6 +41,11 @@ const CLI::Validator& nonNegativeValidator();
 /// Progress callback drawing a bar on stderr when it is a terminal (nothing otherwise).
 ProgressCallback terminalProgress(bool enabled);
 
+/// Installs SIGINT, SIGTERM and SIGHUP handlers (unless the signal is ignored) that delete the
+/// temporaries of outputs being written (removePendingTemporaries) and then re-raise the signal,
+/// so an interrupted run leaves neither a partial output nor a hidden temporary behind.
+void installInterruptCleanup();
+
 /// Runs a subcommand body, turning texgrad errors into one line on stderr and an exit status.
 int runGuarded(const std::function<void()>& body);
 

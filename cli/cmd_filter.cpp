@@ -74,7 +74,15 @@ void addFilterCommand(CLI::App& app) {
       "filter",
       "Smooth (--beta < 1) or sharpen (--beta > 1) a texture by scaling its gradients on the "
       "surface and solving the screened Poisson equation (alpha M + S) x = (alpha M + beta S) x0 "
-      "(paper Sec. 7.1). Seams stay continuous; lengths are measured on the surface, not in UV.");
+      "(paper Sec. 7.1); lengths are measured on the surface, not in UV. Seams: the output's "
+      "texels are the coefficients of a function in the paper's seam-continuous texel basis, and "
+      "that function is continuous across seams (to rounding, any beta). A renderer's bilinear "
+      "lookup reads the texels next to a seam differently on each side; the jump between the two "
+      "sides' lookups is texel-scale detail, which the filter scales by about beta like all such "
+      "detail: on the shared test meshes at 1024x1024 the RMS jump is 0.0-0.7 times the input's "
+      "at beta 0 and 1.98-2.10 times at beta 2. Sharpening thus amplifies the jumps the input "
+      "has; run `texgrad seams` on the input or on the result to remove them (RMS jump then at "
+      "most 1.02 8-bit steps on those meshes).");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   cmd->add_option("texture", args->texture,

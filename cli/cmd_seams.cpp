@@ -1,4 +1,6 @@
 // `texgrad seams`: re-solve the texels along chart boundaries for the smoothest values.
+#include <iostream>
+
 #include "cli_common.h"
 #include "commands.h"
 #include "texgrad/apps/seams.h"
@@ -25,6 +27,10 @@ void runSeams(const SeamsArgs& args) {
   timer.lap("operators");
   const SeamsResult result = smoothSeams(domain, texture, mask);
   timer.lap("solve");
+  if (result.unanchoredTexels > 0 && !args.report.quiet)
+    std::cerr << "texgrad: note: " << result.unanchoredTexels
+              << " texels kept as they are: no fixed texel ties them to the rest (charts too "
+                 "thin for an interior texel at this resolution, or a mask over whole charts)\n";
   writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth);
   timer.lap("write");
   if (args.report.timings) timer.print();
@@ -34,6 +40,7 @@ void runSeams(const SeamsArgs& args) {
     printJson({{"command", "seams"},
                {"texels", domain.unknowns()},
                {"free_texels", result.freeTexels},
+               {"unanchored_texels", result.unanchoredTexels},
                {"seam_jump_before", before.rms},
                {"seam_jump_after", after.rms},
                {"stages", timer.json()},
@@ -47,9 +54,13 @@ void addSeamsCommand(CLI::App& app) {
   auto args = std::make_shared<SeamsArgs>();
   CLI::App* cmd = app.add_subcommand(
       "seams",
-      "Hide texture seams: replace the texels along chart boundaries (or under --mask) by the "
-      "smoothest values that agree with all other texels (a Dirichlet problem in the "
-      "seam-continuous texel space). Other texels are unchanged bit for bit.");
+      "Hide texture seams: replace the texels whose footprint a chart boundary crosses (or the "
+      "texels under --mask) by the smoothest values that agree with all other texels (a "
+      "Dirichlet problem in the seam-continuous texel space). Texels under stacked or mirrored "
+      "charts away from their boundaries are kept; so are groups of texels with no other texel "
+      "to agree with (a chart too thin for an interior texel and not joined by seams to one that "
+      "has them; --json counts them as unanchored_texels). Other texels are unchanged bit for "
+      "bit.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   cmd->add_option("texture", args->texture, "Texture (default: the mesh's --texture-slot texture)");

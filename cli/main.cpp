@@ -3,12 +3,14 @@
 #include <cstddef>
 #include <iostream>
 
+#include "cli_common.h"
 #include "commands.h"
 #include "texgrad/core/heap_reuse.h"
 
 int texgrad::cli::exitStatus = 0;
 
 int main(int argc, char** argv) {
+  texgrad::cli::installInterruptCleanup();  // a killed run leaves no temporary output file
   CLI::App app{
       "texgrad: gradient-domain processing of surface signals inside a texture atlas.\n"
       "Meshes: .obj (+.mtl), .ply, .gltf, .glb, or builtin:NAME for a procedural mesh."};

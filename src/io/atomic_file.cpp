@@ -4,7 +4,9 @@
 
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
+#include <cstring>
 #include <string>
 #include <system_error>
 
@@ -21,6 +23,51 @@ std::filesystem::path temporaryPathFor(const std::filesystem::path& target) {
                            "-" + std::to_string(counter++) + target.extension().string();
   return target.parent_path() / name;
 }
+
+/// Room for one registered temporary's path, terminating zero included (Linux PATH_MAX).
+constexpr size_t kMaxPathBytes = 4096;
+
+/// States of a registry slot. A signal handler only reads slots it moves Pending -> Taken, and a
+/// Taken slot is never written again, so the handler never sees a path being copied.
+enum SlotState : int { kFree, kFilling, kPending, kTaken };
+
+/// One registered temporary: what removePendingTemporaries may unlink.
+struct PendingSlot {
+  std::atomic<int> state{kFree};
+  std::array<char, kMaxPathBytes> path{};
+};
+static_assert(std::atomic<int>::is_always_lock_free, "signal handlers need lock-free atomics");
+
+std::array<PendingSlot, kMaxPendingTemporaries> pendingSlots;
+
+/// Registers a temporary's absolute path for the lifetime of the object (no slot: unregistered).
+class PendingTemporary {
+ public:
+  explicit PendingTemporary(const std::filesystem::path& temporary) {
+    std::error_code ec;
+    const std::filesystem::path absolute = std::filesystem::absolute(temporary, ec);
+    const std::string& path = (ec ? temporary : absolute).native();
+    if (path.size() >= kMaxPathBytes) return;
+    for (PendingSlot& slot : pendingSlots) {
+      int expected = kFree;
+      if (!slot.state.compare_exchange_strong(expected, kFilling)) continue;
+      std::memcpy(slot.path.data(), path.c_str(), path.size() + 1);
+      slot.state.store(kPending);
+      slot_ = &slot;
+      return;
+    }
+  }
+  /// Frees the slot unless a signal handler has taken it (then the process is ending).
+  ~PendingTemporary() {
+    int expected = kPending;
+    if (slot_ != nullptr) slot_->state.compare_exchange_strong(expected, kFree);
+  }
+  PendingTemporary(const PendingTemporary&) = delete;
+  PendingTemporary& operator=(const PendingTemporary&) = delete;
+
+ private:
+  PendingSlot* slot_ = nullptr;
+};
 
 void removeQuietly(const std::filesystem::path& path) {
   std::error_code ignored;
@@ -42,6 +89,9 @@ void writeAtomically(const std::filesystem::path& target,
     throw IoError("cannot write " + target.string() + ": it is a folder");
 
   const std::filesystem::path temporary = temporaryPathFor(target);
+  // Registered before `write` creates the file, released after the rename: at no moment does
+  // the temporary exist unregistered.
+  const PendingTemporary registration(temporary);
   try {
     write(temporary);
   } catch (...) {
@@ -52,6 +102,13 @@ void writeAtomically(const std::filesystem::path& target,
   if (ec) {
     removeQuietly(temporary);
     throw IoError("cannot write " + target.string() + ": " + ec.message());
+  }
+}
+
+void removePendingTemporaries() noexcept {
+  for (PendingSlot& slot : pendingSlots) {
+    int expected = kPending;
+    if (slot.state.compare_exchange_strong(expected, kTaken)) ::unlink(slot.path.data());
   }
 }
 

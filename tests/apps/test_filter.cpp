@@ -7,6 +7,7 @@
 #include "shared_meshes.h"
 #include "texgrad/apps/filter.h"
 #include "texgrad/apps/normal_map.h"
+#include "texgrad/apps/seams.h"
 #include "texgrad/atlas/seam_jump.h"
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_reader.h"
@@ -20,6 +21,33 @@ FilterOptions withSolver(SolverKind kind, double beta) {
   o.beta = beta;
   o.solver.kind = kind;
   return o;
+}
+
+/// Largest seam jump of the seam-continuous function allowed (texture units: rounding only).
+constexpr double kContinuityTolerance = 1e-6;
+/// How far from beta the bilinear seam jump's scale may be (measured 1.98-2.10 at beta 2).
+constexpr double kBetaScaleTolerance = 0.15;
+/// The bilinear seam jump after beta = 0 is at most this fraction of the input's (measured 0-0.68).
+constexpr double kSmoothedJumpRatio = 0.7;
+/// RMS bilinear seam jump in 8-bit steps that `seams` brings sharpened textures under (measured
+/// at most 1.02 on the shared meshes at 1024^2, whether run before or after filtering).
+constexpr double kSeamsResidualSteps = 1.1;
+
+/// Largest |f(p) - f(q)| over `samples` random seam-equivalent pairs p ~ q, where f is the function
+/// sum_t x_t phi_t the texture's texel values define in the seam-continuous basis (every channel).
+double finiteElementSeamJump(const TexelDomain& domain, const Image& image, int samples) {
+  const fem::TexelBasis& basis = domain.operators().basis();
+  const Eigen::MatrixXd x = gatherTexels(domain.grid(), image);
+  std::mt19937_64 rng(11);
+  double worst = 0.0;
+  for (int k = 0; k < samples; ++k) {
+    const auto [p, q] = basis.randomSeamPair(rng);
+    for (Eigen::Index c = 0; c < x.cols(); ++c) {
+      const Eigen::VectorXd column = x.col(c);
+      worst = std::max(worst, std::abs(basis.evaluate(p, column) - basis.evaluate(q, column)));
+    }
+  }
+  return worst;
 }
 
 TEST(Filter, BetaOneReturnsTheInput) {
@@ -43,6 +71,22 @@ TEST(Filter, SmoothingLowersSeamJumpAndEnergySharpeningRaisesEnergy) {
   const SeamJump before = measureSeamJump(domain.mesh(), domain.atlas(), input);
   const SeamJump after = measureSeamJump(domain.mesh(), domain.atlas(), smooth);
   EXPECT_LT(after.rms, 0.5 * before.rms);
+}
+
+/// The statement of `filter --help` on a procedural atlas (fast; the shared meshes below): the
+/// result's function in the seam-continuous basis is continuous across seams, and the bilinear
+/// seam jump a renderer sees is scaled by about beta (texel-scale detail, like all fine detail).
+TEST(Filter, SharpenedFunctionIsContinuousAndBilinearSeamJumpScalesWithBeta) {
+  const TexelDomain domain(procedural::cubeSphere(8), 128, 128);
+  const Image input = test::randomTexture(128, 128, 3, 2);
+  const Image sharp = filterTexture(domain, input, withSolver(SolverKind::Direct, 2.0)).image;
+  const Image smooth = filterTexture(domain, input, withSolver(SolverKind::Direct, 0.0)).image;
+  EXPECT_LE(finiteElementSeamJump(domain, sharp, 500), kContinuityTolerance);
+  const auto jump = [&](const Image& image) {
+    return measureSeamJump(domain.mesh(), domain.atlas(), image).rms;
+  };
+  EXPECT_NEAR(jump(sharp) / jump(input), 2.0, kBetaScaleTolerance);
+  EXPECT_LE(jump(smooth), kSmoothedJumpRatio * jump(input));
 }
 
 TEST(Filter, SoftSeamBaselineNeedsLambdaWhereTheContinuousBasisDoesNot) {
@@ -228,6 +272,46 @@ TEST_P(SharedFilterJumpSlow, SmoothingLowersSeamJumpAndEnergy) {
 
 INSTANTIATE_TEST_SUITE_P(AllMeshes, SharedFilterJumpSlow, ::testing::ValuesIn(test::sharedMeshes()),
                          test::sharedMeshName);
+
+/// What `texgrad filter --help` says about seams, measured on every shared mesh's texture (at
+/// most 1024 across, default filter settings): the filtered function is continuous across seams,
+/// while the bilinear lookups a renderer makes on the two sides of a seam differ by the RMS jump
+/// of measureSeamJump, which smoothing lowers, sharpening raises, and `seams` removes.
+class SharedFilterSeamContinuitySlow : public ::testing::TestWithParam<test::SharedMesh> {};
+
+TEST_P(SharedFilterSeamContinuitySlow, FunctionIsContinuousAndBilinearJumpIsAsDocumented) {
+  const test::SharedMesh& s = GetParam();
+  const Image texture = test::textureAtMost(readImage(test::sharedData() / s.texture), 1024);
+  const TexelDomain domain(readMesh(test::sharedData() / s.obj), texture.width, texture.height);
+  if (domain.atlas().seams.empty()) GTEST_SKIP() << s.name << " has no seams";
+  FilterOptions smoothing, sharpening;
+  smoothing.beta = 0.0;
+  sharpening.beta = 2.0;
+  const Image smooth = filterTexture(domain, texture, smoothing).image;
+  const Image sharp = filterTexture(domain, texture, sharpening).image;
+  const Image seamless = smoothSeams(domain, texture).image;
+  const auto jump = [&](const Image& image) {
+    return 255.0 * measureSeamJump(domain.mesh(), domain.atlas(), image).rms;
+  };
+  const double input = jump(texture), beta0 = jump(smooth), beta2 = jump(sharp);
+  const double beta2Seams = jump(smoothSeams(domain, sharp).image);
+  const double seamsBeta2 = jump(filterTexture(domain, seamless, sharpening).image);
+  const double fe2 = 255.0 * finiteElementSeamJump(domain, sharp, 2000);
+  std::printf(
+      "[ seam continuity ] %-12s %4dx%-4d RMS bilinear jump (8-bit): input %.2f, beta 0 "
+      "%.2f, beta 2 %.2f (x%.2f), seams(input) %.2f, seams(beta 2) %.2f, beta 2 of "
+      "seams(input) %.2f; max FE jump at beta 2 %.1e\n",
+      s.name.c_str(), texture.width, texture.height, input, beta0, beta2, beta2 / input,
+      jump(seamless), beta2Seams, seamsBeta2, fe2);
+  EXPECT_LE(fe2 / 255.0, kContinuityTolerance);
+  EXPECT_NEAR(beta2 / input, 2.0, kBetaScaleTolerance);
+  EXPECT_LE(beta0, kSmoothedJumpRatio * input);
+  EXPECT_LE(beta2Seams, kSeamsResidualSteps);
+  EXPECT_LE(seamsBeta2, kSeamsResidualSteps);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllMeshes, SharedFilterSeamContinuitySlow,
+                         ::testing::ValuesIn(test::sharedMeshes()), test::sharedMeshName);
 
 /// Multigrid (default settings) against the direct solution on every shared mesh at 1024².
 class SharedFilterSlow : public ::testing::TestWithParam<test::SharedMesh> {};

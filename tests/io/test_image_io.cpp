@@ -350,6 +350,20 @@ TEST(AtomicFile, ThrowingWriterLeavesTargetUntouchedAndNoTemporary) {
   EXPECT_EQ(filesIn(dir), std::vector<std::string>{"out.txt"});
 }
 
+TEST(AtomicFile, PendingTemporariesAreRemovedOnRequestAndFinishedOnesAreNot) {
+  const auto dir = tempDir("atomic_pending");
+  writeAtomically(dir / "done.txt", [&](const std::filesystem::path& t) { writeBytes(t, "1"); });
+  // What an interrupt handler does in the middle of a write: the temporary goes, the rename then
+  // fails, and the finished output of the earlier write is left alone.
+  EXPECT_THROW(writeAtomically(dir / "out.txt",
+                               [&](const std::filesystem::path& temporary) {
+                                 writeBytes(temporary, "half of the new");
+                                 removePendingTemporaries();
+                               }),
+               IoError);
+  EXPECT_EQ(filesIn(dir), std::vector<std::string>{"done.txt"});
+}
+
 TEST(AtomicFile, ReplacesAnExistingImage) {
   const auto dir = tempDir("atomic_replace");
   writeImage(dir / "img.png", Image(4, 4, 1, PixelFormat::UInt8));

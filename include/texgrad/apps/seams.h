@@ -2,6 +2,9 @@
 // for the smoothest values given all other texels, which removes visible seams.
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "texgrad/apps/texel_domain.h"
 #include "texgrad/io/image.h"
 
@@ -9,13 +12,21 @@ namespace texgrad {
 
 /// Result of smoothSeams.
 struct SeamsResult {
-  Image image;                ///< texture with the free texels replaced
-  int64_t freeTexels = 0;     ///< texels that were re-solved
+  Image image;                    ///< texture with the free texels replaced
+  int64_t freeTexels = 0;         ///< texels that were re-solved
+  std::vector<int32_t> resolved;  ///< their unknown indices, ascending
+  /// Candidates left as they are because no fixed texel ties their group to the rest (a whole
+  /// chart, or charts joined by seams, with no texel off a chart boundary or outside the mask).
+  int64_t unanchoredTexels = 0;
 };
 
-/// Replaces the boundary texels (or, if `mask` is not empty, the active texels where its channel
-/// 0 > 0.5) by the values minimising the Dirichlet energy x^T S x with every other texel fixed:
-/// S_FF x_F = -S_FK x_K, solved directly. All other texels are returned bit for bit.
+/// Replaces the boundary texels whose footprint a chart boundary crosses (chartBoundaryTexels; or,
+/// if `mask` is not empty, the active texels where its channel 0 > 0.5) by the values minimising
+/// the Dirichlet energy x^T S x with every other texel fixed: S_FF x_F = -S_FK x_K, solved directly
+/// (with a screening towards the input of relative weight 1e-9 for conditioning). Texels under
+/// stacked or mirrored charts that no chart boundary crosses stay fixed. Candidates joined by S
+/// to no fixed texel have no data to agree with and are not re-solved (unanchoredTexels). All
+/// texels not re-solved are returned bit for bit.
 SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const Image& mask = {});
 
 }  // namespace texgrad
