@@ -27,6 +27,8 @@ namespace {
 constexpr std::string_view kBuiltinPrefix = "builtin:";
 constexpr int kSampleTextureSize = 1024;
 constexpr int kProgressBarWidth = 40;
+/// UV offset of builtin:jittered-cube from the lattice, in texels (issue 31's reproduction).
+constexpr double kJitteredCubeTexels = 1e-4;
 
 bool isBuiltin(const std::string& spec) {
   return spec.rfind(kBuiltinPrefix, 0) == 0;
@@ -35,7 +37,7 @@ bool isBuiltin(const std::string& spec) {
 }  // namespace
 
 std::string builtinMeshNames() {
-  return "sample, sphere, cube, cylinder, square, two-charts";
+  return "sample, sphere, cube, cylinder, square, two-charts, aligned-cube, jittered-cube";
 }
 
 TexturedMesh loadMesh(const std::string& spec, double weldTolerance) {
@@ -52,6 +54,8 @@ TexturedMesh loadMesh(const std::string& spec, double weldTolerance) {
   if (name == "cylinder") return procedural::cylinder();
   if (name == "square") return procedural::square();
   if (name == "two-charts") return procedural::twoChartSquare();
+  if (name == "aligned-cube") return procedural::alignedCube();
+  if (name == "jittered-cube") return procedural::alignedCube(4, kJitteredCubeTexels);
   throw InvalidInputError("unknown built-in mesh '" + spec +
                           "'; use builtin:NAME with NAME one of " + builtinMeshNames());
 }
@@ -60,7 +64,12 @@ Image loadTexture(const TexturedMesh& mesh, const std::string& meshSpec,
                   const std::string& explicitPath, const std::string& slot) {
   if (!explicitPath.empty()) return readImage(explicitPath);
   if (std::optional<Image> texture = readMeshTexture(mesh, slot)) return std::move(*texture);
-  if (isBuiltin(meshSpec)) return procedural::sampleTexture(kSampleTextureSize, kSampleTextureSize);
+  if (isBuiltin(meshSpec)) {
+    const std::string name = meshSpec.substr(kBuiltinPrefix.size());
+    const bool aligned = name == "aligned-cube" || name == "jittered-cube";
+    const int size = aligned ? procedural::kAlignedCubeResolution : kSampleTextureSize;
+    return procedural::sampleTexture(size, size);
+  }
   throw InvalidInputError(meshSpec + " references no " + slot +
                           " texture; pass the texture file as an argument");
 }

@@ -19,7 +19,9 @@ namespace texgrad::cli {
 /// Mesh argument: a file path, or `builtin:NAME` for a procedural mesh (see builtinMeshNames()).
 TexturedMesh loadMesh(const std::string& spec, double weldTolerance);
 
-/// Names accepted after `builtin:` (sample, sphere, cube, cylinder, square, two-charts).
+/// Names accepted after `builtin:` (sample, sphere, cube, cylinder, square, two-charts,
+/// aligned-cube: UVs on texel centres at 256 x 256, its sample texture's size; jittered-cube: the
+/// same moved off the lattice by up to 1e-4 texel).
 std::string builtinMeshNames();
 
 /// Texture for a mesh: the explicit path if given, else the mesh's slot texture (readMeshTexture),

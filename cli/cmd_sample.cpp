@@ -42,7 +42,8 @@ void addSampleCommand(CLI::App& app) {
   cmd->add_option("--out-dir,-o", args->outDir, "Folder to write into")->default_val("sample");
   cmd->add_option("--mesh", args->mesh, "Which built-in mesh: " + builtinMeshNames())
       ->default_val("sample")
-      ->check(CLI::IsMember({"sample", "sphere", "cube", "cylinder", "square", "two-charts"}));
+      ->check(CLI::IsMember({"sample", "sphere", "cube", "cylinder", "square", "two-charts",
+                             "aligned-cube", "jittered-cube"}));
   cmd->add_option("--size", args->size, "Texture size in texels (square)")
       ->default_val(1024)
       ->check(CLI::Range(2, 16384));

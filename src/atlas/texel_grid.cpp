@@ -29,8 +29,8 @@ void setExtent(const TexturedMesh& mesh, TexelGrid& g) {
   double lx = std::numeric_limits<double>::infinity(), ly = lx, hx = -lx, hy = -lx;
   for (const Triangle& t : mesh.uvTriangles)
     for (int32_t k : t) {
-      const Eigen::Vector2d p(mesh.uvs[k].x() * g.imageWidth - 0.5,
-                              mesh.uvs[k].y() * g.imageHeight - 0.5);
+      const Eigen::Vector2d p(snapToLattice(mesh.uvs[k].x() * g.imageWidth - 0.5),
+                              snapToLattice(mesh.uvs[k].y() * g.imageHeight - 0.5));
       lx = std::min(lx, p.x());
       hx = std::max(hx, p.x());
       ly = std::min(ly, p.y());

@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <numbers>
+#include <string>
 
 #include "texgrad/core/error.h"
 
@@ -101,16 +103,19 @@ void requireAtLeast(const char* what, int value, int minimum) {
 constexpr std::array<std::array<int, 2>, 6> kCubeFaceUvAxes{
     {{1, 2}, {2, 1}, {2, 0}, {0, 2}, {0, 1}, {1, 0}}};
 
-/// The surface of the lattice cube [0, n]^3 as six charts in a 3 x 2 atlas; `position` maps a
-/// lattice point to 3-D.
-TexturedMesh latticeCube(int n, const std::function<Eigen::Vector3d(const VertexKey&)>& position) {
+/// UV of grid point (i, j) of an n x n chart of cube face f.
+using CubeFaceUv = std::function<Eigen::Vector2d(int f, int i, int j)>;
+
+/// The surface of the lattice cube [0, n]^3 as six charts; `position` maps a lattice point to 3-D
+/// and `uv` places each face's grid.
+TexturedMesh latticeCube(int n, const std::function<Eigen::Vector3d(const VertexKey&)>& position,
+                         const CubeFaceUv& uv) {
   MeshBuilder builder;
   for (int f = 0; f < 6; ++f) {
     const int axis = f / 2;
     const bool plus = f % 2 == 0;
     const int au = kCubeFaceUvAxes[static_cast<size_t>(f)][0];
     const int av = kCubeFaceUvAxes[static_cast<size_t>(f)][1];
-    const UvRect rect = atlasCell(f % 3, f / 3, 3, 2);
     auto key = [&](int i, int j) {
       VertexKey k{};
       k[static_cast<size_t>(axis)] = plus ? n : 0;
@@ -120,9 +125,23 @@ TexturedMesh latticeCube(int n, const std::function<Eigen::Vector3d(const Vertex
     };
     builder.addGridChart(
         n, n, key, [&](int i, int j) { return position(key(i, j)); },
-        [&](int i, int j) { return rect.at(double(i) / n, double(j) / n); });
+        [&](int i, int j) { return uv(f, i, j); });
   }
   return builder.take();
+}
+
+/// Face f's chart in the 3 x 2 atlas of `cube` and `cubeSphere`.
+Eigen::Vector2d atlasCubeUv(int n, int f, int i, int j) {
+  return atlasCell(f % 3, f / 3, 3, 2).at(double(i) / n, double(j) / n);
+}
+
+/// A fixed pseudo-random number in [-1, 1] for key k (SplitMix64 finaliser).
+double hashToUnit(uint64_t k) {
+  k += 0x9e3779b97f4a7c15ull;
+  k = (k ^ (k >> 30)) * 0xbf58476d1ce4e5b9ull;
+  k = (k ^ (k >> 27)) * 0x94d049bb133111ebull;
+  k ^= k >> 31;
+  return 2.0 * static_cast<double>(k >> 11) / static_cast<double>(1ull << 53) - 1.0;
 }
 
 /// Point of the torus at angle theta around the centre circle and phi around the tube.
@@ -180,9 +199,41 @@ TexturedMesh twoChartSquare(int n) {
 TexturedMesh cube(int subdivisions) {
   requireAtLeast("cube subdivisions", subdivisions, 1);
   const double n = subdivisions;
-  return latticeCube(subdivisions, [n](const VertexKey& k) {
-    return Eigen::Vector3d(k[0] / n - 0.5, k[1] / n - 0.5, k[2] / n - 0.5);
-  });
+  return latticeCube(
+      subdivisions,
+      [n](const VertexKey& k) {
+        return Eigen::Vector3d(k[0] / n - 0.5, k[1] / n - 0.5, k[2] / n - 0.5);
+      },
+      [subdivisions](int f, int i, int j) { return atlasCubeUv(subdivisions, f, i, j); });
+}
+
+TexturedMesh alignedCube(int subdivisions, double jitter) {
+  requireAtLeast("cube subdivisions", subdivisions, 1);
+  if (kAlignedCubeChartTexels % subdivisions != 0)
+    throw InvalidInputError("procedural mesh: aligned cube subdivisions must divide " +
+                            std::to_string(kAlignedCubeChartTexels) + " (got " +
+                            std::to_string(subdivisions) + ")");
+  if (!(std::abs(jitter) < 1.0))
+    throw InvalidInputError("procedural mesh: aligned cube jitter must be below one texel");
+  // Chart origins in texel-centre coordinates: 21-texel gutters, all inside the 256^2 image.
+  constexpr std::array<int, 3> kColumn{8, 93, 178};
+  constexpr std::array<int, 2> kRow{24, 152};
+  const int step = kAlignedCubeChartTexels / subdivisions;
+  const double n = subdivisions;
+  return latticeCube(
+      subdivisions,
+      [n](const VertexKey& k) {
+        return Eigen::Vector3d(k[0] / n - 0.5, k[1] / n - 0.5, k[2] / n - 0.5);
+      },
+      [&](int f, int i, int j) {
+        const auto key =
+            static_cast<uint64_t>((f * (subdivisions + 1) + j) * (subdivisions + 1) + i);
+        const Eigen::Vector2d texel(
+            kColumn[static_cast<size_t>(f % 3)] + step * i + jitter * hashToUnit(2 * key),
+            kRow[static_cast<size_t>(f / 3)] + step * j + jitter * hashToUnit(2 * key + 1));
+        return Eigen::Vector2d((texel.x() + 0.5) / kAlignedCubeResolution,
+                               (texel.y() + 0.5) / kAlignedCubeResolution);
+      });
 }
 
 TexturedMesh cylinder(int around, int along) {
@@ -208,10 +259,13 @@ TexturedMesh cylinder(int around, int along) {
 TexturedMesh cubeSphere(int subdivisions) {
   requireAtLeast("sphere subdivisions", subdivisions, 1);
   const double n = subdivisions;
-  return latticeCube(subdivisions, [n](const VertexKey& k) {
-    return Eigen::Vector3d(2.0 * k[0] / n - 1.0, 2.0 * k[1] / n - 1.0, 2.0 * k[2] / n - 1.0)
-        .normalized();
-  });
+  return latticeCube(
+      subdivisions,
+      [n](const VertexKey& k) {
+        return Eigen::Vector3d(2.0 * k[0] / n - 1.0, 2.0 * k[1] / n - 1.0, 2.0 * k[2] / n - 1.0)
+            .normalized();
+      },
+      [subdivisions](int f, int i, int j) { return atlasCubeUv(subdivisions, f, i, j); });
 }
 
 TexturedMesh twoCones(int around, int rings) {

@@ -36,9 +36,9 @@ struct MeshCase {
 /// Names of the cases of allMeshes(), in order. Test names are made when the tests register, in
 /// every process of test_io: taken from here, no mesh is built then
 /// (Procedural.EveryCaseHasItsName checks that the two lists agree).
-constexpr std::array<std::string_view, 9> kMeshNames = {
-    "square", "mirrored_square", "two_charts", "two_charts_odd", "cube",
-    "cube1",  "cylinder",        "sphere",     "torus"};
+constexpr std::array<std::string_view, 11> kMeshNames = {
+    "square",   "mirrored_square", "two_charts", "two_charts_odd", "cube",         "cube1",
+    "cylinder", "sphere",          "torus",      "aligned_cube",   "jittered_cube"};
 
 std::vector<MeshCase> allMeshes() {
   const double torusArea = 4 * kPi * kPi * 1.0 * 0.4;
@@ -53,6 +53,8 @@ std::vector<MeshCase> allMeshes() {
       {"cylinder", procedural::cylinder(32, 16), 2 * 32 * 16, 1, 1.0, 2e-3, false, 0},
       {"sphere", procedural::cubeSphere(16), 6 * 2 * 256, 6, 4 * kPi, 0.02, true, 4.0 / 3.0 * kPi},
       {"torus", procedural::sampleTorus(), 0, 4, torusArea, 0.02, true, torusVolume},
+      {"aligned_cube", procedural::alignedCube(4), 6 * 2 * 16, 6, 6.0, 1e-12, true, 1.0},
+      {"jittered_cube", procedural::alignedCube(4, 1e-4), 6 * 2 * 16, 6, 6.0, 1e-12, true, 1.0},
   };
 }
 
@@ -229,6 +231,25 @@ TEST(Procedural, SeamEdgeCounts) {
   EXPECT_EQ(seamEdgeCount(procedural::cylinder(32, 16)), 16);
   EXPECT_EQ(seamEdgeCount(procedural::cubeSphere(5)), 12 * 5);
   EXPECT_GT(seamEdgeCount(procedural::sampleTorus()), 0);
+}
+
+TEST(Procedural, AlignedCubeUvsAreTexelCentresAndJitterStaysWithinItsBound) {
+  constexpr int kSize = procedural::kAlignedCubeResolution;
+  const TexturedMesh aligned = procedural::alignedCube(8);
+  const TexturedMesh jittered = procedural::alignedCube(8, 1e-4);
+  ASSERT_EQ(aligned.uvs.size(), jittered.uvs.size());
+  int moved = 0;
+  for (size_t k = 0; k < aligned.uvs.size(); ++k)
+    for (int a = 0; a < 2; ++a) {
+      const double texel = aligned.uvs[k][a] * kSize - 0.5;
+      EXPECT_EQ(texel, std::round(texel)) << "uv " << k;
+      const double offset = jittered.uvs[k][a] * kSize - 0.5 - texel;
+      EXPECT_LE(std::abs(offset), 1e-4 * (1.0 + 1e-9)) << "uv " << k;
+      moved += offset != 0.0;
+    }
+  EXPECT_EQ(moved, static_cast<int>(2 * aligned.uvs.size()));
+  EXPECT_EQ(seamEdgeCount(aligned), 12 * 8);
+  EXPECT_ANY_THROW(procedural::alignedCube(3));  // 64 texels do not split into 3 quads
 }
 
 TEST(Procedural, DefaultSquareIsTheUnitSquare) {

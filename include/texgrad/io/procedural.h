@@ -13,6 +13,14 @@ TexturedMesh square(double su = 1.0, double sv = 1.0, double u0 = 0.0, double v0
 TexturedMesh twoChartSquare(int n = 4);
 /// Unit cube with one chart per face (6 charts, 12 seams edges per side), packed in a 3x2 atlas.
 TexturedMesh cube(int subdivisions = 4);
+/// Texture size at which alignedCube's UVs lie on texel centres.
+inline constexpr int kAlignedCubeResolution = 256;
+/// Texels per side of each alignedCube chart at kAlignedCubeResolution.
+inline constexpr int kAlignedCubeChartTexels = 64;
+/// Unit cube as six 64 x 64-texel charts of a 256 x 256 texture (3 x 2 atlas): at that size every
+/// UV is a texel centre, so chart edges run on lattice lines; each UV is then moved by a fixed
+/// pseudo-random offset of at most `jitter` texels per coordinate. `subdivisions` divides 64.
+TexturedMesh alignedCube(int subdivisions = 4, double jitter = 0.0);
 /// Open cylinder (radius 1/(2π), height 1) cut along one generator: one chart, one seam.
 TexturedMesh cylinder(int around = 32, int along = 16);
 /// Unit sphere as a projected cube: 6 charts in a 3x2 atlas with gutters (the geodesic fixture).

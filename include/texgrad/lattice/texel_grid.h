@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -22,6 +23,22 @@ enum class CellCoverage : uint8_t {
   Partial = 1,  ///< at least one chart overlaps it, but it is not entirely inside one chart
   Full = 2,     ///< the cell lies entirely inside a single chart
 };
+
+/// Distance in texels within which a grid coordinate of the mesh is taken to lie on its lattice
+/// line. UVs that an exporter snapped to texel centres are off the lattice by their rounding (up
+/// to ~1e-3 texel for float UVs at 16K, ~1e-13 for doubles at sizes that are not powers of two);
+/// left there, every chart edge on a lattice line cuts sliver pieces as thin as that offset,
+/// whose texels have near-zero mass and whose seam nodes make the basis ramp across the sliver,
+/// so the solution jumps by orders of magnitude between the aligned mesh and the same mesh moved
+/// by 1e-4 texel. Moving such coordinates onto the line moves the surface by at most this much
+/// in the texture and makes the discretisation continuous there.
+inline constexpr double kLatticeSnapTexels = 1.0 / 256.0;
+
+/// Grid coordinate c moved onto the nearest lattice line (integer) if within kLatticeSnapTexels.
+inline double snapToLattice(double c) {
+  const double line = std::nearbyint(c);
+  return std::abs(c - line) <= kLatticeSnapTexels ? line : c;
+}
 
 /// Texel lattice for a W x H texture. Continuous texel coordinates p = (u W - 0.5, v H - 0.5)
 /// put texel centres on the integer lattice; cell (a, b) is the square [a, a+1] x [b, b+1].
@@ -62,9 +79,11 @@ struct TexelGrid {
   int texelIndex(int x, int y) const { return y * nx + x; }
   /// Linear index of grid cell (a, b), a in [-1, nx - 1], b in [-1, ny - 1].
   int cellIndex(int a, int b) const { return (b + 1) * (nx + 1) + (a + 1); }
-  /// Converts a UV point to continuous grid coordinates (texel centres at integers).
+  /// Converts a UV point to continuous grid coordinates (texel centres at integers); coordinates
+  /// within kLatticeSnapTexels of a lattice line are put on it (all mesh corners pass here).
   Eigen::Vector2d toGrid(const Eigen::Vector2d& uv) const {
-    return {uv.x() * imageWidth - 0.5 - x0, uv.y() * imageHeight - 0.5 - y0};
+    return {snapToLattice(uv.x() * imageWidth - 0.5) - x0,
+            snapToLattice(uv.y() * imageHeight - 0.5) - y0};
   }
   /// Converts continuous grid coordinates back to UV.
   Eigen::Vector2d toUv(const Eigen::Vector2d& p) const {
