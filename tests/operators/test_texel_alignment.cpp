@@ -1,4 +1,4 @@
-// Operator invariants (DESIGN.md Sec. 4) on a cube whose UVs lie on texel centres, so that chart
+// Operator invariants (paper Sec. 5) on a cube whose UVs lie on texel centres, so that chart
 // edges run on lattice lines, and on the same cube moved up to 1e-4 texel off the lattice
 // (issue 31): unmoved coordinates and coordinates within kLatticeSnapTexels of a line must give
 // the same, well-conditioned operators.
@@ -54,7 +54,7 @@ TEST(TexelAlignment, CubeOperatorsKeepTheirInvariants) {
     EXPECT_GT(m.diagonal().minCoeff(), 0.1 * m.diagonal().maxCoeff()) << jitter;
     // Stiffness stays that of texel-sized pieces: no ramp across a sliver.
     EXPECT_LT(s.diagonal().maxCoeff(), 10.0) << jitter;
-    // Partition of unity (DESIGN.md Sec. 3) at random points of M.
+    // Partition of unity (paper Sec. 4) at random points of M.
     std::mt19937_64 rng(31);
     double worst = 0.0;
     for (int k = 0; k < 2000; ++k) {
