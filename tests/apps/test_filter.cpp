@@ -283,10 +283,14 @@ TEST_P(SharedFilterSeamContinuitySlow, FunctionIsContinuousAndBilinearJumpIsAsDo
   const test::SharedMesh& s = GetParam();
   const Image texture = test::textureAtMost(readImage(test::sharedData() / s.texture), 1024);
   const TexelDomain domain(readMesh(test::sharedData() / s.obj), texture.width, texture.height);
-  if (domain.atlas().seams.empty()) GTEST_SKIP() << s.name << " has no seams";
   FilterOptions smoothing, sharpening;
   smoothing.beta = 0.0;
   sharpening.beta = 2.0;
+  if (domain.atlas().seams.empty()) {  // Suzanne has no seam: nothing may jump
+    const Image sharp = filterTexture(domain, texture, sharpening).image;
+    EXPECT_EQ(measureSeamJump(domain.mesh(), domain.atlas(), sharp).rms, 0.0);
+    return;
+  }
   const Image smooth = filterTexture(domain, texture, smoothing).image;
   const Image sharp = filterTexture(domain, texture, sharpening).image;
   const Image seamless = smoothSeams(domain, texture).image;
