@@ -329,7 +329,7 @@ void addReportOptions(CLI::App* cmd, ReportArgs& args) {
   cmd->add_flag("--json", args.json,
                 "Print a JSON summary (texels, phases, cycles, residuals) on stdout");
   cmd->add_flag("--timings", args.timings, "Print the time of each stage on stderr");
-  cmd->add_flag("--quiet,-q", args.quiet, "No progress bar");
+  cmd->add_flag("--quiet,-q", args.quiet, "No progress bar and no summary line");
 }
 
 namespace {
