@@ -344,11 +344,11 @@ void GeodesicSolver::Impl::requireReachInImage(
   for (const ResolvedSource& s : sources)
     where += (where.empty() ? "UV (" : ", (") + std::to_string(s.uv.x()) + ", " +
              std::to_string(s.uv.y()) + ")";
-  throw InvalidInputError("the geodesic source" + std::string(sources.size() > 1 ? "s" : "") +
-                          " at " + where +
-                          " reach no texel inside the image: the parts of the surface they lie on "
-                          "have their UVs outside [0, 1]^2, so every distance in the output "
-                          "would be +inf; pick a source on a part inside the image");
+  throw InvalidInputError("no texel inside the image is reached from the geodesic source(s) at " +
+                          where +
+                          ": the parts of the surface holding them have their UVs outside "
+                          "[0, 1]^2, so every distance in the output would be +inf; pick a "
+                          "source on a part inside the image");
 }
 
 void GeodesicSolver::Impl::collectNearField() {
