@@ -3,11 +3,13 @@
 
 #include <unistd.h>
 
+#include <array>
 #include <cctype>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <new>
 #include <optional>
@@ -327,7 +329,7 @@ void addReportOptions(CLI::App* cmd, ReportArgs& args) {
   cmd->add_flag("--json", args.json,
                 "Print a JSON summary (texels, phases, cycles, residuals) on stdout");
   cmd->add_flag("--timings", args.timings, "Print the time of each stage on stderr");
-  cmd->add_flag("--quiet,-q", args.quiet, "No progress bar");
+  cmd->add_flag("--quiet,-q", args.quiet, "No progress bar and no summary line");
 }
 
 namespace {
@@ -370,16 +372,73 @@ nlohmann::json toJson(const SolveReport& report) {
             {"total", report.times.total()}}}};
 }
 
-void writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const Image& image,
-                        const std::string& slot, const std::string& bitDepth) {
-  std::optional<PixelFormat> format;
-  if (!bitDepth.empty()) format = parsePixelFormat(bitDepth);
-  // writeMeshTexture refuses this too; the CLI's message names the flag.
-  if (isGltfPath(out) && !isGltfPath(mesh.sourcePath))
+std::optional<PixelFormat> requestedFormat(const std::string& bitDepth) {
+  if (bitDepth.empty()) return std::nullopt;
+  return parsePixelFormat(bitDepth);
+}
+
+namespace {
+
+/// writeMeshTexture refuses this too; the CLI's message names the flag.
+void requireGltfMeshFor(const std::string& out, const std::filesystem::path& meshSource) {
+  if (isGltfPath(out) && !isGltfPath(meshSource))
     throw InvalidInputError("--out " + out +
                             " asks for a glTF asset, but the mesh was not read "
                             "from glTF; write an image (.png, .exr, ...) instead");
-  writeMeshTexture(out, mesh, image, slot, format);
+}
+
+}  // namespace
+
+void checkTextureOutputArgs(const std::string& out, const std::string& meshSpec,
+                            const std::string& bitDepth) {
+  const std::filesystem::path source = isBuiltin(meshSpec) ? "" : meshSpec;
+  requireGltfMeshFor(out, source);
+  checkMeshTextureOutput(out, source, requestedFormat(bitDepth));
+}
+
+void checkImageOutputArgs(const std::string& out, const std::string& bitDepth) {
+  checkImageOutput(out, requestedFormat(bitDepth));
+}
+
+std::string bitDepthHelp(const std::string& defaultText) {
+  return "8, 16, half or float (default: " + defaultText +
+         "); a depth the output format cannot hold is an error (.jpg: 8; .png and glTF: 8 or "
+         "16; .exr: half or float; .tif: 8, 16 or float)";
+}
+
+PixelFormat writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const Image& image,
+                               const std::string& slot, const std::string& bitDepth) {
+  requireGltfMeshFor(out, mesh.sourcePath);
+  return writeMeshTexture(out, mesh, image, slot, requestedFormat(bitDepth));
+}
+
+namespace {
+
+/// 512340 as "512,340".
+std::string groupedDigits(int64_t value) {
+  std::string digits = std::to_string(value);
+  for (auto k = static_cast<std::ptrdiff_t>(digits.size()) - 3; k > 0; k -= 3)
+    digits.insert(static_cast<size_t>(k), ",");
+  return digits;
+}
+
+std::string_view channelsName(int channels) {
+  static constexpr std::array<std::string_view, 4> names{"1-channel", "2-channel", "RGB", "RGBA"};
+  return channels >= 1 && channels <= 4 ? names[static_cast<size_t>(channels - 1)] : "?";
+}
+
+}  // namespace
+
+void printWritten(bool quiet, const std::string& path, const Image& image, PixelFormat stored,
+                  int64_t texels, double seconds) {
+  if (quiet) return;
+  std::ostringstream line;
+  line << "wrote " << path << ": " << image.width << "x" << image.height << " "
+       << channelsName(image.channels) << " " << pixelFormatName(stored);
+  if (texels >= 0) line << ", " << groupedDigits(texels) << " texels solved";
+  char time[32];
+  std::snprintf(time, sizeof time, " in %.1f s", seconds);
+  std::cerr << line.str() << time << "\n";
 }
 
 }  // namespace texgrad::cli

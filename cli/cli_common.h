@@ -82,7 +82,7 @@ void addSolverOptions(CLI::App* cmd, SolverArgs& args, const SolverSettings& def
 struct ReportArgs {
   bool json = false;     ///< print a JSON summary on stdout
   bool timings = false;  ///< print phase timings on stderr
-  bool quiet = false;    ///< no progress bar
+  bool quiet = false;    ///< no progress bar, no summary line
 };
 /// Registers --json, --timings and --quiet on `cmd`.
 void addReportOptions(CLI::App* cmd, ReportArgs& args);
@@ -97,6 +97,8 @@ class StageTimer {
   nlohmann::json json() const;
   /// One line per stage on stderr.
   void print() const;
+  /// Seconds from construction to the last lap.
+  double total() const { return last_ - start_; }
 
  private:
   std::vector<std::pair<std::string, double>> stages_;
@@ -108,7 +110,29 @@ nlohmann::json toJson(const SolveReport& report);
 
 /// Writes a processed texture with writeMeshTexture (an image file, or a copy of the mesh's glTF
 /// asset when `out` ends in .gltf/.glb); `bitDepth` as parsePixelFormat, empty: the image's.
-void writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const Image& image,
-                        const std::string& slot, const std::string& bitDepth);
+/// Returns the pixel format stored.
+PixelFormat writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const Image& image,
+                               const std::string& slot, const std::string& bitDepth);
+
+/// --bit-depth's value as a format; nullopt when empty (the command's default).
+std::optional<PixelFormat> requestedFormat(const std::string& bitDepth);
+
+/// Checks, right after parsing and before any file is read, that writeTextureOutput can write
+/// `out` for the mesh `meshSpec` with `bitDepth` (checkMeshTextureOutput): every command that
+/// writes calls this (or checkImageOutputArgs) first, so a bad output fails in no time.
+void checkTextureOutputArgs(const std::string& out, const std::string& meshSpec,
+                            const std::string& bitDepth);
+
+/// The same for an output that is always an image file (checkImageOutput).
+void checkImageOutputArgs(const std::string& out, const std::string& bitDepth);
+
+/// --bit-depth's help: the values, the default `defaultText`, and that a depth the output's
+/// format cannot hold is an error.
+std::string bitDepthHelp(const std::string& defaultText);
+
+/// Unless `quiet`, one line on stderr saying what was written: "wrote out.png: 1024x1024 RGB
+/// 8-bit, 512,340 texels solved in 2.1 s" (`texels` < 0: no texel count).
+void printWritten(bool quiet, const std::string& path, const Image& image, PixelFormat stored,
+                  int64_t texels, double seconds);
 
 }  // namespace texgrad::cli

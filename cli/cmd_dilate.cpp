@@ -5,6 +5,7 @@
 #include "commands.h"
 #include "texgrad/apps/dilate.h"
 #include "texgrad/atlas/atlas.h"
+#include "texgrad/atlas/image_coverage.h"
 #include "texgrad/atlas/texel_grid.h"
 #include "texgrad/io/image_io.h"
 
@@ -15,18 +16,22 @@ struct DilateArgs {
   std::string mesh, texture, out, bitDepth;
   DilateOptions options;
   double weldTolerance = 0.0;
+  bool quiet = false;
 };
 
 void runDilate(const DilateArgs& args) {
   args.options.validate();
+  checkImageOutputArgs(args.out, args.bitDepth);
+  StageTimer timer;
   const TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  requireUvsInImage(mesh);
   const Image texture = loadTexture(mesh, args.mesh, args.texture);
   const Atlas atlas = buildAtlas(mesh);
   const TexelGrid grid = buildTexelGrid(mesh, atlas, texture.width, texture.height);
   const Image padded = dilateGutters(mesh, atlas, grid, texture, args.options);
-  std::optional<PixelFormat> format;
-  if (!args.bitDepth.empty()) format = parsePixelFormat(args.bitDepth);
-  writeImage(args.out, padded, format);
+  const PixelFormat stored = writeImage(args.out, padded, requestedFormat(args.bitDepth));
+  timer.lap("write");
+  printWritten(args.quiet, args.out, padded, stored, -1, timer.total());
 }
 
 }  // namespace
@@ -48,8 +53,8 @@ void addDilateCommand(CLI::App& app) {
                      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--infinite", args->options.infinite, "Fill every gutter texel of the image")
       ->excludes(radius);
-  cmd->add_option("--bit-depth", args->bitDepth,
-                  "8, 16, half or float (default: the input texture's)");
+  cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input texture's"));
+  cmd->add_flag("--quiet,-q", args->quiet, "No summary line");
   addWeldToleranceOption(cmd, args->weldTolerance);
   cmd->callback([args] { exitStatus = runGuarded([&] { runDilate(*args); }); });
 }

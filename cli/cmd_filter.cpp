@@ -25,6 +25,7 @@ struct FilterArgs {
 void runFilter(FilterArgs args) {
   StageTimer timer;
   args.options.solver = args.solver.settings();
+  checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   if (args.options.normalMap && args.slot == "baseColor") args.slot = "normal";
   const ProgressCallback progress = terminalProgress(!args.report.quiet);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
@@ -51,8 +52,10 @@ void runFilter(FilterArgs args) {
   }
   const FilterResult result = filterTexture(domain, texture, args.options);
   timer.lap("solve");
-  writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth);
+  const PixelFormat stored =
+      writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth);
   timer.lap("write");
+  printWritten(args.report.quiet, args.out, result.image, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();
   if (args.report.json)
     printJson({{"command", "filter"},
@@ -120,8 +123,7 @@ void addFilterCommand(CLI::App& app) {
                   "Which texture of the mesh to use and replace: baseColor, normal, emissive, "
                   "metallicRoughness, occlusion")
       ->default_val("baseColor");
-  cmd->add_option("--bit-depth", args->bitDepth,
-                  "8, 16, half or float (default: the input texture's)");
+  cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input texture's"));
   addWeldToleranceOption(cmd, args->weldTolerance);
   addSolverOptions(cmd, args->solver, FilterOptions().solver);
   addReportOptions(cmd, args->report);

@@ -127,6 +127,8 @@ void runGeodesic(GeodesicArgs args) {
   args.options.boundary = parseGeodesicBoundary(args.boundary);
   args.options.validate();
   const std::vector<GeodesicSource> sources = parseSources(args);
+  checkImageOutputArgs(args.out, "");
+  if (!args.png.empty()) checkImageOutputArgs(args.png, "");
   const ProgressCallback progress = terminalProgress(!args.report.quiet);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   for (const GeodesicSource& s : sources)  // fail before the expensive operator build
@@ -148,15 +150,21 @@ void runGeodesic(GeodesicArgs args) {
 
   Image distances(width, height, 1, PixelFormat::Float);
   scatterTexels(domain.grid(), result.distances, distances);
-  writeImage(args.out, dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), distances),
-             PixelFormat::Float);
+  const PixelFormat stored =
+      writeImage(args.out, dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), distances),
+                 PixelFormat::Float);
+  std::optional<PixelFormat> pictureStored;
+  Image picture;
   if (!args.png.empty()) {
-    const Image picture =
-        distanceColourMap(domain.grid(), result.distances, result.maxDistance, args.isolines);
-    writeImage(args.png, dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), picture),
-               PixelFormat::UInt8);
+    picture = dilateGutters(
+        domain.mesh(), domain.atlas(), domain.grid(),
+        distanceColourMap(domain.grid(), result.distances, result.maxDistance, args.isolines));
+    pictureStored = writeImage(args.png, picture, PixelFormat::UInt8);
   }
   timer.lap("write");
+  printWritten(args.report.quiet, args.out, distances, stored, domain.unknowns(), timer.total());
+  if (pictureStored)
+    printWritten(args.report.quiet, args.png, picture, *pictureStored, -1, timer.total());
   if (args.report.timings) timer.print();
   if (!args.report.json) return;
   nlohmann::json resolved = nlohmann::json::array();

@@ -39,6 +39,7 @@ void runLic(LicArgs args) {
   args.options.solver = args.solver.settings();
   args.options.channels = args.colour ? 3 : 1;
   args.options.validate();
+  checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   const auto [width, height] = parseResolution(args.resolution);
   const ProgressCallback progress = terminalProgress(!args.report.quiet);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
@@ -52,8 +53,10 @@ void runLic(LicArgs args) {
   const LicResult result = lineIntegralConvolution(domain, fieldTexel, args.options, progress);
   timer.lap("solve");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
-  writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth);
+  const PixelFormat stored =
+      writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth);
   timer.lap("write");
+  printWritten(args.report.quiet, args.out, padded, stored, domain.unknowns(), timer.total());
   const bool sharpened = args.options.sharpenBeta != 1.0;
   if (!result.report.diffusion.converged || (sharpened && !result.report.sharpening.converged))
     std::cerr << "texgrad: warning: an LIC solve stopped before reaching its tolerance "
@@ -141,7 +144,7 @@ void addLicCommand(CLI::App& app) {
       ->check(positiveValidator());
   cmd->add_flag("--color,--colour", args->colour,
                 "Colour noise (random hues) instead of grey noise");
-  cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: 8)");
+  cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("8"));
   addWeldToleranceOption(cmd, args->weldTolerance);
   // Plain V-cycles stall on the anisotropic metric (paper Sec. 8): default to multigrid-CG.
   addSolverOptions(cmd, args->solver, defaultLicSolver());

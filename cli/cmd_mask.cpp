@@ -2,6 +2,7 @@
 #include "cli_common.h"
 #include "commands.h"
 #include "texgrad/atlas/atlas.h"
+#include "texgrad/atlas/image_coverage.h"
 #include "texgrad/atlas/texel_grid.h"
 #include "texgrad/atlas/texel_mask.h"
 #include "texgrad/io/image_io.h"
@@ -16,18 +17,22 @@ struct MaskArgs {
   std::string kind = "active";
   std::string bitDepth;
   double weldTolerance = 0.0;
+  bool quiet = false;
 };
 
 void runMask(const MaskArgs& args) {
   const MaskKind kind = parseMaskKind(args.kind);
   const auto [w, h] = parseResolution(args.resolution);
+  checkImageOutputArgs(args.out, args.bitDepth);
+  StageTimer timer;
   const TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  requireUvsInImage(mesh);
   const Atlas atlas = buildAtlas(mesh);
   const TexelGrid grid = buildTexelGrid(mesh, atlas, w, h);
   const Image mask = texelMask(grid, kind);
-  std::optional<PixelFormat> format;
-  if (!args.bitDepth.empty()) format = parsePixelFormat(args.bitDepth);
-  writeImage(args.out, mask, format);
+  const PixelFormat stored = writeImage(args.out, mask, requestedFormat(args.bitDepth));
+  timer.lap("write");
+  printWritten(args.quiet, args.out, mask, stored, -1, timer.total());
 }
 
 }  // namespace
@@ -49,7 +54,8 @@ void addMaskCommand(CLI::App& app) {
                   "chart), coverage (white: one chart, red: footprint meets several charts)")
       ->default_val("active")
       ->check(CLI::IsMember({"active", "boundary", "interior", "chart", "coverage"}));
-  cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default 8)");
+  cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("8"));
+  cmd->add_flag("--quiet,-q", args->quiet, "No summary line");
   addWeldToleranceOption(cmd, args->weldTolerance);
   cmd->callback([args] { exitStatus = runGuarded([&] { runMask(*args); }); });
 }

@@ -46,6 +46,7 @@ void runReact(ReactArgs args) {
   args.options.diffusionV *= args.patternScale * args.patternScale;
   args.options.seedRadius *= args.patternScale;
   args.options.validate();
+  checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   const auto [width, height] = parseResolution(args.resolution);
   const ProgressCallback progress = terminalProgress(!args.report.quiet);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
@@ -56,8 +57,10 @@ void runReact(ReactArgs args) {
   const ReactionResult result = reactionDiffusion(domain, args.options, args.steps, progress);
   timer.lap("steps");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
-  writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth);
+  const PixelFormat stored =
+      writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth);
   timer.lap("write");
+  printWritten(args.report.quiet, args.out, padded, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();
   if (args.report.json)
     printJson({{"command", "react"},
@@ -120,7 +123,7 @@ void addReactCommand(CLI::App& app) {
   cmd->add_option("--resolution,-r", args->resolution, "Output texture size WxH (or N)")
       ->default_val("512")
       ->check(resolutionValidator());
-  cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: 8)");
+  cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("8"));
   addWeldToleranceOption(cmd, args->weldTolerance);
   addSolverOptions(cmd, args->solver, defaultReactionSolver());
   addReportOptions(cmd, args->report);

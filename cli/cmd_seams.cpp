@@ -18,6 +18,7 @@ struct SeamsArgs {
 
 void runSeams(const SeamsArgs& args) {
   StageTimer timer;
+  checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
   const Image mask = args.mask.empty() ? Image() : readImage(args.mask);
@@ -31,8 +32,10 @@ void runSeams(const SeamsArgs& args) {
     std::cerr << "texgrad: note: " << result.unanchoredTexels
               << " texels kept as they are: no fixed texel ties them to the rest (charts too "
                  "thin for an interior texel at this resolution, or a mask over whole charts)\n";
-  writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth);
+  const PixelFormat stored =
+      writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth);
   timer.lap("write");
+  printWritten(args.report.quiet, args.out, result.image, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();
   if (args.report.json) {
     const SeamJump before = measureSeamJump(domain.mesh(), domain.atlas(), texture);
@@ -70,7 +73,7 @@ void addSeamsCommand(CLI::App& app) {
                   "boundary texels");
   cmd->add_option("--texture-slot", args->slot, "Texture of the mesh to use and replace")
       ->default_val("baseColor");
-  cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: the input's)");
+  cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input's"));
   addWeldToleranceOption(cmd, args->weldTolerance);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runSeams(*args); }); });

@@ -55,6 +55,7 @@ nlohmann::json gainsJson(const Eigen::MatrixXd& gains) {
 void runStitch(StitchArgs args) {
   StageTimer timer;
   args.options.solver = args.solver.settings();
+  checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   const bool compositeMode = !args.composite.empty();
   if (compositeMode == !args.partials.empty())
     throw InvalidInputError(
@@ -84,8 +85,10 @@ void runStitch(StitchArgs args) {
                                   ? stitchComposite(domain, composite, segments, args.options)
                                   : stitchPartials(domain, partials, confidences, args.options);
   timer.lap("solve");
-  writeTextureOutput(args.out, domain.mesh(), result.image, "baseColor", args.bitDepth);
+  const PixelFormat stored =
+      writeTextureOutput(args.out, domain.mesh(), result.image, "baseColor", args.bitDepth);
   timer.lap("write");
+  printWritten(args.report.quiet, args.out, result.image, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();
   if (args.report.json)
     printJson({{"command", "stitch"},
@@ -133,7 +136,7 @@ void addStitchCommand(CLI::App& app) {
                 "Compensate one gain per source and channel only; by default the gain may vary "
                 "with the surface normal, exp(a + b . n), which also removes smooth per-view "
                 "shading");
-  cmd->add_option("--bit-depth", args->bitDepth, "8, 16, half or float (default: the input's)");
+  cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input's"));
   addWeldToleranceOption(cmd, args->weldTolerance);
   SolverSettings solverDefaults;
   solverDefaults.cycles = 10;

@@ -41,6 +41,7 @@ void runView(ViewArgs& args) {
   args.appOptions.validate();
   args.session.savePath = args.out;
   args.session.validate();
+  if (!args.out.empty()) checkTextureOutputArgs(args.out, args.mesh, "");
   args.server.validate();
   const bool stitch = kind == viewer::ViewerAppKind::Stitch;
   if (!stitch && (!args.composite.empty() || !args.segments.empty()))

@@ -121,6 +121,10 @@ struct GeodesicSolver::Impl {
   void labelComponents();
   /// Marks the unknowns in a component that holds a source (reachable_).
   void findReachable();
+  /// Throws InvalidInputError naming the sources when the components their weights touch hold
+  /// no texel inside the image (the output would be all +inf).
+  void requireReachInImage(const std::vector<std::vector<fem::TexelWeight>>& weights,
+                           const std::vector<ResolvedSource>& sources) const;
   void buildDirichlet();
   void updateDirichlet();
   /// Per component of A1's support graph: the constant to subtract from y (GeodesicOffset).
@@ -278,6 +282,7 @@ void GeodesicSolver::Impl::setSources(std::span<const GeodesicSource> sources) {
                               std::to_string(resolved.back().uv.y()) + ")");
     for (const fem::TexelWeight& w : weights.back()) impulse(w.unknown, 0) += w.weight;
   }
+  requireReachInImage(weights, resolved);
   sources_ = std::move(resolved);
   sourceWeights_ = std::move(weights);
   impulse_ = std::move(impulse);
@@ -319,6 +324,31 @@ void GeodesicSolver::Impl::findReachable() {
   reachable_.resize(component_.size());
   for (size_t u = 0; u < component_.size(); ++u)
     reachable_[u] = reached[static_cast<size_t>(component_[u])];
+}
+
+void GeodesicSolver::Impl::requireReachInImage(
+    const std::vector<std::vector<fem::TexelWeight>>& weights,
+    const std::vector<ResolvedSource>& sources) const {
+  std::vector<uint8_t> reached(static_cast<size_t>(componentCount_), 0);
+  for (const auto& source : weights)
+    for (const fem::TexelWeight& w : source)
+      reached[static_cast<size_t>(component_[static_cast<size_t>(w.unknown)])] = 1;
+  const TexelGrid& grid = domain_->grid();
+  for (size_t u = 0; u < component_.size(); ++u) {
+    const int texel = grid.texelOfUnknown[u];
+    if (reached[static_cast<size_t>(component_[u])] &&
+        grid.inImage(texel % grid.nx, texel / grid.nx))
+      return;
+  }
+  std::string where;
+  for (const ResolvedSource& s : sources)
+    where += (where.empty() ? "UV (" : ", (") + std::to_string(s.uv.x()) + ", " +
+             std::to_string(s.uv.y()) + ")";
+  throw InvalidInputError("no texel inside the image is reached from the geodesic source(s) at " +
+                          where +
+                          ": the parts of the surface holding them have their UVs outside "
+                          "[0, 1]^2, so every distance in the output would be +inf; pick a "
+                          "source on a part inside the image");
 }
 
 void GeodesicSolver::Impl::collectNearField() {

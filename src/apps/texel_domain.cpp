@@ -1,6 +1,7 @@
 // TexelDomain: the atlas -> grid -> operators pipeline in one place.
 #include "texgrad/apps/texel_domain.h"
 
+#include "texgrad/atlas/image_coverage.h"
 #include "texgrad/core/error.h"
 
 namespace texgrad {
@@ -8,6 +9,7 @@ namespace texgrad {
 TexelDomain::TexelDomain(TexturedMesh mesh, int width, int height, const OperatorOptions& options,
                          const ProgressCallback& progress)
     : mesh_(std::move(mesh)) {
+  requireUvsInImage(mesh_);  // before any expensive work: wholly outside, nothing would change
   reportProgress(progress, "atlas", 0.0);
   atlas_ = buildAtlas(mesh_);
   grid_ = buildTexelGrid(mesh_, atlas_, width, height);

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <cstring>
 #include <string>
 #include <system_error>
@@ -76,8 +77,7 @@ void removeQuietly(const std::filesystem::path& path) {
 
 }  // namespace
 
-void writeAtomically(const std::filesystem::path& target,
-                     const std::function<void(const std::filesystem::path& temporary)>& write) {
+void checkWritableTarget(const std::filesystem::path& target) {
   if (target.empty() || !target.has_filename())
     throw IoError("cannot write '" + target.string() + "': not a file name");
   const std::filesystem::path folder = target.parent_path();
@@ -87,7 +87,18 @@ void writeAtomically(const std::filesystem::path& target,
                   " does not exist; create it first");
   if (std::filesystem::is_directory(target, ec))
     throw IoError("cannot write " + target.string() + ": it is a folder");
+  // The temporary is created in the folder, so the folder must be writable (the target itself
+  // is replaced by a rename and need not be).
+  const std::filesystem::path where = folder.empty() ? std::filesystem::path(".") : folder;
+  if (::access(where.c_str(), W_OK | X_OK) != 0)
+    throw IoError("cannot write " + target.string() + ": folder " + where.string() +
+                  " is not writable: " + std::strerror(errno));
+}
 
+void writeAtomically(const std::filesystem::path& target,
+                     const std::function<void(const std::filesystem::path& temporary)>& write) {
+  checkWritableTarget(target);
+  std::error_code ec;
   const std::filesystem::path temporary = temporaryPathFor(target);
   // Registered before `write` creates the file, released after the rename: at no moment does
   // the temporary exist unregistered.

@@ -318,6 +318,32 @@ PixelFormat storableFormat(FileKind kind, PixelFormat requested) {
   return requested;
 }
 
+/// Throws UnsupportedError naming `path` unless its extension is one writeImage writes.
+FileKind writableKind(const std::filesystem::path& path) {
+  const FileKind kind = kindOfExtension(path);
+  if (kind == FileKind::Unknown)
+    throw UnsupportedError("cannot write " + path.string() + ": unknown image extension '" +
+                           path.extension().string() + "'; use .png, .jpg, .exr or .tif");
+  return kind;
+}
+
+/// What a kind of file holds, for the message refusing another depth.
+std::string_view formatsHeld(FileKind kind) {
+  switch (kind) {
+    case FileKind::Jpeg:
+      return "8-bit only";
+    case FileKind::Png:
+      return "8 or 16 bits";
+    case FileKind::Exr:
+      return "half or float";
+    case FileKind::Tiff:
+      return "8, 16 bits or float";
+    case FileKind::Unknown:
+      break;
+  }
+  return "";
+}
+
 /// Texel-order floats to file-order samples of type T: clamped to [0, 1] and rounded to the
 /// nearest level for integer T (NaN becomes 0), copied unchanged for float.
 template <typename T>
@@ -412,8 +438,8 @@ Image readImageFromMemory(const std::vector<unsigned char>& bytes, const std::st
   return decodeBytes(bytes, kind, name);
 }
 
-void writeImage(const std::filesystem::path& path, const Image& image,
-                std::optional<PixelFormat> format) {
+PixelFormat writeImage(const std::filesystem::path& path, const Image& image,
+                       std::optional<PixelFormat> format) {
   const std::string name = path.string();
   if (image.width <= 0 || image.height <= 0 || image.channels <= 0)
     throw InvalidInputError("cannot write " + name + ": the image is empty");
@@ -424,10 +450,7 @@ void writeImage(const std::filesystem::path& path, const Image& image,
     throw InvalidInputError("cannot write " + name + ": pixel buffer size does not match " +
                             std::to_string(image.width) + " x " + std::to_string(image.height) +
                             " x " + std::to_string(image.channels));
-  const FileKind kind = kindOfExtension(path);
-  if (kind == FileKind::Unknown)
-    throw UnsupportedError("cannot write " + name + ": unknown image extension '" +
-                           path.extension().string() + "'; use .png, .jpg, .exr or .tif");
+  const FileKind kind = writableKind(path);
   if (kind == FileKind::Jpeg && (image.channels == 2 || image.channels == 4))
     throw UnsupportedError("cannot write " + name + ": JPEG has no alpha channel; use .png, " +
                            ".exr or .tif to keep all " + std::to_string(image.channels) +
@@ -436,6 +459,32 @@ void writeImage(const std::filesystem::path& path, const Image& image,
   writeAtomically(path, [&](const std::filesystem::path& temporary) {
     encode(temporary, path, image, stored);
   });
+  return stored;
+}
+
+void checkImageOutput(const std::filesystem::path& path, std::optional<PixelFormat> requested) {
+  const FileKind kind = writableKind(path);
+  if (requested && storableFormat(kind, *requested) != *requested)
+    throw InvalidInputError(
+        "cannot write " + path.string() + " as " + std::string(pixelFormatName(*requested)) + ": " +
+        std::string(kindName(kind)) + " holds " + std::string(formatsHeld(kind)) +
+        "; pick another bit depth or extension (.png: 8/16, .exr: "
+        "half/float, .tif: 8/16/float)");
+  checkWritableTarget(path);
+}
+
+std::string_view pixelFormatName(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::UInt8:
+      return "8-bit";
+    case PixelFormat::UInt16:
+      return "16-bit";
+    case PixelFormat::Half:
+      return "half float";
+    case PixelFormat::Float:
+      return "float";
+  }
+  return "";
 }
 
 PixelFormat parsePixelFormat(const std::string& text) {

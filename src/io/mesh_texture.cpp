@@ -6,6 +6,7 @@
 #include <cctype>
 
 #include "texgrad/core/error.h"
+#include "texgrad/io/atomic_file.h"
 #include "texgrad/io/gltf_writer.h"
 #include "texgrad/io/image_io.h"
 
@@ -26,18 +27,42 @@ bool isGltfPath(const std::filesystem::path& path) {
   return ext == ".gltf" || ext == ".glb";
 }
 
-void writeMeshTexture(const std::filesystem::path& out, const TexturedMesh& mesh,
-                      const Image& image, const std::string& slot,
-                      std::optional<PixelFormat> format) {
-  if (!isGltfPath(out)) {
-    writeImage(out, image, format);
-    return;
-  }
-  if (!isGltfPath(mesh.sourcePath))
+namespace {
+
+/// Throws InvalidInputError naming `out` unless `meshSource` is a glTF asset to copy.
+void requireGltfSource(const std::filesystem::path& out, const std::filesystem::path& meshSource) {
+  if (!isGltfPath(meshSource))
     throw InvalidInputError(out.string() +
                             " asks for a glTF asset, but the mesh was not read from glTF; write "
                             "an image (.png, .exr, ...) instead");
+}
+
+}  // namespace
+
+void checkMeshTextureOutput(const std::filesystem::path& out,
+                            const std::filesystem::path& meshSource,
+                            std::optional<PixelFormat> requested) {
+  if (!isGltfPath(out)) {
+    checkImageOutput(out, requested);
+    return;
+  }
+  requireGltfSource(out, meshSource);
+  if (requested && *requested != PixelFormat::UInt8 && *requested != PixelFormat::UInt16)
+    throw InvalidInputError("cannot write " + out.string() + " with a " +
+                            std::string(pixelFormatName(*requested)) +
+                            " texture: glTF output embeds a PNG (8 or 16 bits)");
+  checkWritableTarget(out);
+}
+
+PixelFormat writeMeshTexture(const std::filesystem::path& out, const TexturedMesh& mesh,
+                             const Image& image, const std::string& slot,
+                             std::optional<PixelFormat> format) {
+  if (!isGltfPath(out)) return writeImage(out, image, format);
+  requireGltfSource(out, mesh.sourcePath);
   writeGltfWithTexture(mesh.sourcePath, out, slot, image, format);
+  // The embedded PNG's depth (writeGltfWithTexture).
+  return format.value_or(image.format) == PixelFormat::UInt8 ? PixelFormat::UInt8
+                                                             : PixelFormat::UInt16;
 }
 
 }  // namespace texgrad

@@ -42,11 +42,12 @@ class GeodesicView final : public ViewerApp {
 
   void apply(const ClientMessage& message) override {
     if (const auto* source = std::get_if<SetSource>(&message)) {
-      if (!source->add) sources_.clear();
-      if (sources_.size() >= kMaxSources)
+      std::vector<GeodesicSource> next = source->add ? sources_ : std::vector<GeodesicSource>{};
+      if (next.size() >= kMaxSources)
         throw ProtocolError("at most " + std::to_string(kMaxSources) + " sources");
-      sources_.push_back(GeodesicSource::atUv(hitUv(domain_.mesh(), source->at)));
-      solver_.setSources(sources_);
+      next.push_back(GeodesicSource::atUv(hitUv(domain_.mesh(), source->at)));
+      solver_.setSources(next);  // a refused source (outside the image) keeps the old ones
+      sources_ = std::move(next);
     } else if (const auto* run = std::get_if<Run>(&message);
                run && run->action == RunAction::Reset) {
       if (!sources_.empty()) solver_.setSources(sources_);

@@ -15,7 +15,8 @@ namespace texgrad {
 /// built once and shared by apps, the CLI and the viewer. Not copyable (operators refer to it).
 class TexelDomain {
  public:
-  /// Builds atlas, grid (width x height) and operators; throws InvalidInputError if the atlas
+  /// Builds atlas, grid (width x height) and operators; throws InvalidInputError, before any of
+  /// that work, if the UVs lie wholly outside the image (requireUvsInImage), and if the atlas
   /// covers no texel at this resolution.
   TexelDomain(TexturedMesh mesh, int width, int height, const OperatorOptions& options = {},
               const ProgressCallback& progress = {});

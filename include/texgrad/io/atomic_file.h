@@ -6,8 +6,13 @@
 
 namespace texgrad {
 
+/// Throws IoError unless writeAtomically could write `target`: a file name whose folder exists
+/// and is writable, and which is not a folder. Cheap; for checking outputs before any work.
+void checkWritableTarget(const std::filesystem::path& target);
+
 /// Calls `write` with a temporary path next to `target`, then renames it onto `target`. If
 /// `write` throws, the temporary is removed and the exception propagates; `target` is untouched.
+/// Throws IoError first if checkWritableTarget refuses `target`.
 ///
 /// While `write` runs, the temporary's absolute path is registered (up to kMaxPendingTemporaries
 /// at once) so that removePendingTemporaries can delete it if the process is being killed.

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include "texgrad/io/image.h"
@@ -17,9 +18,19 @@ Image readImage(const std::filesystem::path& path);
 Image readImageFromMemory(const std::vector<unsigned char>& bytes, const std::string& name);
 
 /// Writes an image atomically (temporary file in the same folder, then rename). The format
-/// defaults to image.format; it is adjusted to what the extension supports (JPEG: 8-bit).
-void writeImage(const std::filesystem::path& path, const Image& image,
-                std::optional<PixelFormat> format = std::nullopt);
+/// defaults to image.format; it is adjusted to what the extension supports (JPEG: 8-bit; PNG: 8
+/// or 16 bits; OpenEXR: half or float; TIFF: no half). Returns the format stored.
+PixelFormat writeImage(const std::filesystem::path& path, const Image& image,
+                       std::optional<PixelFormat> format = std::nullopt);
+
+/// Checks before any work that writeImage can write `path`: a known image extension, a format
+/// `requested` by the user that the file type holds as it is (no silent adjustment), and a
+/// writable folder (checkWritableTarget). Throws UnsupportedError, InvalidInputError or IoError.
+void checkImageOutput(const std::filesystem::path& path,
+                      std::optional<PixelFormat> requested = std::nullopt);
+
+/// "8-bit", "16-bit", "half float", "float".
+std::string_view pixelFormatName(PixelFormat format);
 
 /// Parses "8", "16", "half", "float" into a PixelFormat; throws InvalidInputError otherwise.
 PixelFormat parsePixelFormat(const std::string& text);

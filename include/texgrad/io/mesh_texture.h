@@ -23,9 +23,16 @@ bool isGltfPath(const std::filesystem::path& path);
 /// Writes a processed texture of `mesh` to `out`: an image file (writeImage), or, when `out` is
 /// a glTF path, a copy of the mesh's source asset whose `slot` texture is `image`
 /// (writeGltfWithTexture). `format` defaults to image.format. Throws InvalidInputError if a glTF
-/// output is asked for a mesh that was not read from glTF.
-void writeMeshTexture(const std::filesystem::path& out, const TexturedMesh& mesh,
-                      const Image& image, const std::string& slot = "baseColor",
-                      std::optional<PixelFormat> format = std::nullopt);
+/// output is asked for a mesh that was not read from glTF. Returns the pixel format stored.
+PixelFormat writeMeshTexture(const std::filesystem::path& out, const TexturedMesh& mesh,
+                             const Image& image, const std::string& slot = "baseColor",
+                             std::optional<PixelFormat> format = std::nullopt);
+
+/// Checks before any work that writeMeshTexture can write `out` for a mesh read from
+/// `meshSource` (empty for a procedural mesh): checkImageOutput for an image; for a glTF output,
+/// a glTF source, a `requested` depth its PNG holds (8 or 16 bits) and a writable folder.
+void checkMeshTextureOutput(const std::filesystem::path& out,
+                            const std::filesystem::path& meshSource,
+                            std::optional<PixelFormat> requested = std::nullopt);
 
 }  // namespace texgrad

@@ -1,0 +1,202 @@
+// CLI contract on what a command writes: nothing (and a non-zero status) when no texel of the
+// image would change, bad output paths refused before any input is read, and one summary line.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "cli_runner.h"
+#include "test_paths.h"
+#include "texgrad/io/image_io.h"
+
+namespace texgrad::test::cli_outputs {
+namespace {
+
+/// A unit square (two faces) whose UVs are the unit square moved by (du, dv).
+std::string shiftedSquareObj(double du, double dv) {
+  std::string obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+  for (const auto& [u, v] : std::vector<std::pair<double, double>>{{0, 0}, {1, 0}, {1, 1}, {0, 1}})
+    obj += "vt " + std::to_string(u + du) + " " + std::to_string(v + dv) + "\n";
+  return obj + "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
+}
+
+void writeText(const std::filesystem::path& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out << bytes;
+}
+
+/// A .vf file with one extrinsic vector per face of the square (vector_field.h).
+std::string squareFieldBytes() {
+  const int32_t count = 2;
+  std::string bytes(reinterpret_cast<const char*>(&count), sizeof count);
+  for (double v : {1.0, 0.0, 0.0, 1.0, 0.0, 0.0})
+    bytes.append(reinterpret_cast<const char*>(&v), sizeof v);
+  return bytes;
+}
+
+/// Writes the inputs every command line below uses into `dir`: meshes inside.obj (UVs in
+/// [0, 1]^2), right.obj (u in [1, 2]), up.obj (v in [1, 2]), half.obj (u in [0.5, 1.5]);
+/// a 32x32 texture and segment mask; a vector field.
+void writeInputs(const std::filesystem::path& dir) {
+  writeText(dir / "inside.obj", shiftedSquareObj(0, 0));
+  writeText(dir / "right.obj", shiftedSquareObj(1, 0));
+  writeText(dir / "up.obj", shiftedSquareObj(0, 1));
+  writeText(dir / "half.obj", shiftedSquareObj(0.5, 0));
+  writeImage(dir / "tex.png", Image(32, 32, 3, PixelFormat::UInt8));
+  writeImage(dir / "seg.png", Image(32, 32, 1, PixelFormat::UInt8));
+  writeText(dir / "field.vf", squareFieldBytes());
+}
+
+/// A command line of `command` on `mesh` writing `out` at 32x32 (its texture's size or -r).
+std::vector<std::string> commandLine(const std::string& command, const std::string& mesh,
+                                     const std::string& out) {
+  if (command == "filter" || command == "seams" || command == "dilate")
+    return {command, mesh, "tex.png", "-o", out};
+  if (command == "stitch")
+    return {command, mesh, "--composite", "tex.png", "--segments", "seg.png", "-o", out};
+  if (command == "geodesic") return {command, mesh, "-r", "32", "--source-vertex", "0", "-o", out};
+  if (command == "lic") return {command, mesh, "-r", "32", "--field", "field.vf", "-o", out};
+  if (command == "react") return {command, mesh, "-r", "32", "--steps", "3", "-o", out};
+  return {command, mesh, "-r", "32", "-o", out};  // mask
+}
+
+std::string joined(const std::vector<std::string>& args) {
+  std::string text;
+  for (const std::string& a : args) text += a + " ";
+  return text;
+}
+
+class EveryWritingCommand : public ::testing::TestWithParam<std::string> {
+ protected:
+  void SetUp() override {
+    dir_ = tempDir("outputs_" + GetParam());
+    writeInputs(dir_);
+  }
+  /// The command's output file name (geodesic writes float distances).
+  std::string out(const std::string& stem = "out") const {
+    return stem + (GetParam() == "geodesic" ? ".exr" : ".png");
+  }
+  std::filesystem::path dir_;
+};
+
+TEST_P(EveryWritingCommand, RefusesUvsOutsideTheImageNamingTheirRange) {
+  // Control: the same command line on the square inside the image, and on one half outside it
+  // (the grid extends past the image), writes its output.
+  for (const char* mesh : {"inside.obj", "half.obj"}) {
+    const auto args = commandLine(GetParam(), mesh, out());
+    const CliResult r = runCli(args, dir_);
+    ASSERT_EQ(r.status, 0) << joined(args) << "\n" << r.err;
+    EXPECT_TRUE(std::filesystem::exists(dir_ / out())) << joined(args);
+    std::filesystem::remove(dir_ / out());
+  }
+  const std::vector<std::pair<std::string, std::string>> outside{
+      {"right.obj", "UVs span u [1, 2] x v [0, 1], outside the image [0, 1]^2"},
+      {"up.obj", "UVs span u [0, 1] x v [1, 2], outside the image [0, 1]^2"}};
+  for (const auto& [mesh, range] : outside) {
+    const auto args = commandLine(GetParam(), mesh, out());
+    const CliResult r = runCli(args, dir_);
+    EXPECT_NE(r.status, 0) << joined(args);
+    EXPECT_EQ(lineCount(r.err), 1) << joined(args) << "\n" << r.err;
+    EXPECT_NE(r.err.find(range), std::string::npos) << joined(args) << "\n" << r.err;
+    EXPECT_NE(r.err.find("move the UVs into [0, 1]^2"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir_ / out())) << joined(args);
+  }
+}
+
+TEST_P(EveryWritingCommand, RefusesABadOutputBeforeReadingAnyInput) {
+  // The mesh does not exist: a refusal that names the output, not the mesh, was made before
+  // anything was read (let alone computed).
+  const std::vector<std::pair<std::string, std::string>> bad{
+      {"out.bmp", "unknown image extension '.bmp'"},
+      {"nodir/" + out(), "folder nodir does not exist"},
+      {"dir.exr", "it is a folder"}};
+  std::filesystem::create_directory(dir_ / "dir.exr");
+  for (const auto& [path, mention] : bad) {
+    const auto args = commandLine(GetParam(), "missing.obj", path);
+    const CliResult r = runCli(args, dir_);
+    EXPECT_NE(r.status, 0) << joined(args);
+    EXPECT_EQ(lineCount(r.err), 1) << joined(args) << "\n" << r.err;
+    EXPECT_NE(r.err.find(mention), std::string::npos) << joined(args) << "\n" << r.err;
+    EXPECT_EQ(r.err.find("missing.obj"), std::string::npos) << joined(args) << "\n" << r.err;
+  }
+}
+
+TEST_P(EveryWritingCommand, RefusesABitDepthTheFormatCannotHold) {
+  if (GetParam() == "geodesic") GTEST_SKIP() << "geodesic has no --bit-depth";
+  const std::vector<std::pair<std::string, std::string>> bad{
+      {"16", "out.jpg"}, {"float", "out.png"}, {"8", "out.exr"}};
+  for (const auto& [depth, path] : bad) {
+    auto args = commandLine(GetParam(), "missing.obj", path);
+    args.insert(args.end(), {"--bit-depth", depth});
+    const CliResult r = runCli(args, dir_);
+    EXPECT_NE(r.status, 0) << joined(args);
+    EXPECT_EQ(lineCount(r.err), 1) << joined(args) << "\n" << r.err;
+    EXPECT_NE(r.err.find("cannot write " + path + " as"), std::string::npos) << joined(args) << "\n"
+                                                                             << r.err;
+    EXPECT_EQ(r.err.find("missing.obj"), std::string::npos) << joined(args) << "\n" << r.err;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Cli, EveryWritingCommand,
+                         ::testing::Values("filter", "stitch", "seams", "dilate", "geodesic", "lic",
+                                           "react", "mask"),
+                         [](const auto& p) { return p.param; });
+
+/// Two squares far apart in 3-D: vertices 0-3 with UVs inside the image, 4-7 with UVs outside.
+const char* kTwoIslandsObj =
+    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+    "v 0 0 5\nv 1 0 5\nv 1 1 5\nv 0 1 5\n"
+    "vt 0.1 0.1\nvt 0.4 0.1\nvt 0.4 0.4\nvt 0.1 0.4\n"
+    "vt 1.1 0.1\nvt 1.4 0.1\nvt 1.4 0.4\nvt 1.1 0.4\n"
+    "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\nf 5/5 6/6 7/7\nf 5/5 7/7 8/8\n";
+
+TEST(Cli, GeodesicRefusesASourceThatReachesNoTexelOfTheImage) {
+  const auto dir = tempDir("outputs_geodesic_island");
+  writeText(dir / "islands.obj", kTwoIslandsObj);
+  const std::vector<std::string> base{"geodesic", "islands.obj", "-r", "32", "-o", "d.exr"};
+  auto inside = base, outside = base;
+  inside.insert(inside.end(), {"--source-vertex", "0"});
+  outside.insert(outside.end(), {"--source-vertex", "4"});
+  const CliResult good = runCli(inside, dir);
+  ASSERT_EQ(good.status, 0) << good.err;
+  std::filesystem::remove(dir / "d.exr");
+  const CliResult r = runCli(outside, dir);
+  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(lineCount(r.err), 1) << r.err;
+  EXPECT_NE(r.err.find("no texel inside the image is reached"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("UV (1.1"), std::string::npos) << "names the source: " << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "d.exr"));
+}
+
+TEST(Cli, SummaryLineSaysWhatWasWritten) {
+  const auto dir = tempDir("outputs_summary");
+  writeInputs(dir);
+  const std::vector<std::string> filter{"filter",      "inside.obj", "tex.png", "-o", "f.png",
+                                        "--bit-depth", "16",         "--beta",  "0.5"};
+  const CliResult r = runCli(filter, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(lineCount(r.err), 1) << r.err;
+  EXPECT_EQ(r.err.rfind("wrote f.png: 32x32 RGB 16-bit, ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find(" texels solved in "), std::string::npos) << r.err;
+  const Image written = readImage(dir / "f.png");
+  EXPECT_EQ(written.format, PixelFormat::UInt16);
+  EXPECT_EQ(written.width, 32);
+  EXPECT_EQ(written.channels, 3);
+  // --quiet: nothing on stderr; --json: the JSON document alone on stdout.
+  auto quiet = filter, json = filter;
+  quiet.push_back("--quiet");
+  json.push_back("--json");
+  const CliResult q = runCli(quiet, dir);
+  ASSERT_EQ(q.status, 0) << q.err;
+  EXPECT_EQ(lineCount(q.err), 0) << q.err;
+  const CliResult j = runCli(json, dir);
+  ASSERT_EQ(j.status, 0) << j.err;
+  EXPECT_EQ(nlohmann::json::parse(j.out)["command"], "filter");
+  EXPECT_EQ(j.err.rfind("wrote f.png", 0), 0u) << j.err;
+}
+
+}  // namespace
+}  // namespace texgrad::test::cli_outputs
