@@ -92,6 +92,35 @@ std::string_view jsonText(const std::vector<unsigned char>& bytes, bool binary) 
   return all.substr(kHeader + kChunkHeader, length);
 }
 
+/// What checkedCapture needs: the caller's image loader and the model tinygltf is filling.
+struct CaptureContext {
+  tinygltf::LoadImageDataFunction capture;
+  ImageBytes* images;
+  const tinygltf::Model* model;
+};
+
+/// Image loader that refuses an image whose bufferView reaches past its buffer before the
+/// caller's loader reads it: tinygltf 2.7 checks the view's and buffer's indices, not the range.
+bool checkedCapture(tinygltf::Image* image, const int index, std::string* error,
+                    std::string* warning, int width, int height, const unsigned char* bytes,
+                    int size, void* user) {
+  const auto& context = *static_cast<const CaptureContext*>(user);
+  if (image->bufferView >= 0) {  // tinygltf has checked both indices before calling
+    const tinygltf::BufferView& view =
+        context.model->bufferViews[static_cast<size_t>(image->bufferView)];
+    const size_t available = context.model->buffers[static_cast<size_t>(view.buffer)].data.size();
+    if (view.byteOffset > available || view.byteLength > available - view.byteOffset) {
+      *error += "image " + std::to_string(index) + ": bufferView " +
+                std::to_string(image->bufferView) + " (bytes " + std::to_string(view.byteOffset) +
+                " + " + std::to_string(view.byteLength) + ") reaches past the end of buffer " +
+                std::to_string(view.buffer) + " (" + std::to_string(available) + " bytes)";
+      return false;
+    }
+  }
+  return context.capture(image, index, error, warning, width, height, bytes, size,
+                         context.images);
+}
+
 std::vector<unsigned char> readBytes(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), {});
@@ -112,8 +141,9 @@ tinygltf::Model loadModel(const std::filesystem::path& path, tinygltf::LoadImage
   // would overflow the stack, so the nesting is bounded before anything is parsed.
   requireJsonDepth(jsonText(bytes, binary), path.string());
   tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(capture, &images);
   tinygltf::Model model;
+  CaptureContext context{capture, &images, &model};
+  loader.SetImageLoader(checkedCapture, &context);
   std::string error, warning;
   const std::string folder = path.parent_path().string();  // external buffers and images
   const auto size = static_cast<unsigned int>(bytes.size());

@@ -1,5 +1,5 @@
-// glTF/GLB whose JSON nests very deeply: refused with one line before tinygltf parses it (the
-// parse used to recurse until the stack overflowed, issue 27).
+// Hostile glTF/GLB files found by fuzzing (issue 27): JSON nested very deeply (tinygltf's parse
+// recursed until the stack overflowed) and image bufferViews past their buffer (read past it).
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -27,15 +27,18 @@ std::string deepJson(int depth, bool objects) {
   return R"({"asset":{"version":"2.0"},"extras":)" + extras + "}";
 }
 
-/// GLB container around `json`: 12-byte header and one JSON chunk (space padded).
-std::string glbOf(std::string json) {
+/// GLB container around `json`: 12-byte header, JSON chunk (space padded), BIN chunk if any.
+std::string glbOf(std::string json, const std::string& bin = "") {
   json.append((4 - json.size() % 4) % 4, ' ');
   std::string out = "glTF";
   const auto put = [&](uint32_t x) { out.append(reinterpret_cast<const char*>(&x), 4); };
   put(2);
-  put(static_cast<uint32_t>(12 + 8 + json.size()));
+  put(static_cast<uint32_t>(12 + 8 + json.size() + (bin.empty() ? 0 : 8 + bin.size())));
   put(static_cast<uint32_t>(json.size()));
-  return out + "JSON" + json;
+  out += "JSON" + json;
+  if (bin.empty()) return out;
+  put(static_cast<uint32_t>(bin.size()));
+  return out + std::string("BIN\0", 4) + bin;
 }
 
 fs::path writeAsset(const std::string& name, const std::string& bytes) {
@@ -80,6 +83,25 @@ TEST(GltfJsonDepth, BracketsInStringsAndModestNestingAreParsed) {
   } catch (const InvalidInputError& e) {
     // A document without meshes is refused later, for having no triangles, not for its depth.
     EXPECT_EQ(std::string(e.what()).find("nests deeper"), std::string::npos) << e.what();
+  }
+}
+
+TEST(GltfUntrusted, ImageBufferViewPastItsBufferIsRefused) {
+  // 8 bytes of buffer; the image's view asks for 9 from byte 4 (ASan saw the read past the end).
+  const std::string json = R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":8}],
+    "bufferViews":[{"buffer":0,"byteOffset":4,"byteLength":9}],
+    "images":[{"bufferView":0,"mimeType":"image/png"}]})";
+  const fs::path path = writeAsset("view.glb", glbOf(json, std::string(8, 'x')));
+  try {
+    readMesh(path);
+    ADD_FAILURE() << "read";
+  } catch (const InvalidInputError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("image 0: bufferView 0 (bytes 4 + 9) reaches past the end of buffer 0 "
+                           "(8 bytes)"),
+              std::string::npos)
+        << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
   }
 }
 
