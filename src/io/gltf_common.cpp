@@ -117,8 +117,7 @@ bool checkedCapture(tinygltf::Image* image, const int index, std::string* error,
       return false;
     }
   }
-  return context.capture(image, index, error, warning, width, height, bytes, size,
-                         context.images);
+  return context.capture(image, index, error, warning, width, height, bytes, size, context.images);
 }
 
 std::vector<unsigned char> readBytes(const std::filesystem::path& path) {
