@@ -10,18 +10,23 @@
 #include <fstream>
 #include <string>
 #include <string_view>
+#include <system_error>
 
 namespace texgrad::fuzz {
 
-/// A folder of this process's own (fuzz jobs may run side by side), created once.
+/// A folder of this process's own (fuzz jobs may run side by side), removed when it exits.
 inline const std::filesystem::path& scratch() {
-  static const std::filesystem::path dir = [] {
-    auto d = std::filesystem::temp_directory_path() /
-             ("texgrad_fuzz_" + std::to_string(static_cast<long>(getpid())));
-    std::filesystem::create_directories(d);
-    return d;
-  }();
-  return dir;
+  struct Folder {
+    std::filesystem::path path = std::filesystem::temp_directory_path() /
+                                 ("texgrad_fuzz_" + std::to_string(static_cast<long>(getpid())));
+    Folder() { std::filesystem::create_directories(path); }
+    ~Folder() {
+      std::error_code ignored;
+      std::filesystem::remove_all(path, ignored);
+    }
+  };
+  static const Folder folder;
+  return folder.path;
 }
 
 /// Writes `bytes` to scratch()/name and returns the path.
