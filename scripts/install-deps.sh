@@ -12,6 +12,8 @@ packages=(
   libopenimageio-dev libtinyobjloader-dev libtinygltf-dev nlohmann-json3-dev libstb-dev
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   libboost-dev
+  # scripts/fuzz.sh: libFuzzer and the sanitizers' runtimes come with clang; seeds via Python.
+  clang-14 libclang-rt-14-dev python3
 )
 if [[ "${1:-}" == "--viewer" ]]; then
   # Debian's packages unless the commands are already there (e.g. Node.js from another source,

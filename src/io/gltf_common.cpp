@@ -3,7 +3,11 @@
 
 #include <array>
 #include <cctype>
+#include <cstdint>
+#include <cstring>
 #include <fstream>
+#include <iterator>
+#include <limits>
 #include <string_view>
 
 #include "texgrad/core/error.h"
@@ -50,15 +54,103 @@ std::vector<int> sceneRoots(const tinygltf::Model& model) {
   return roots;
 }
 
+void requireJsonDepth(std::string_view text, const std::string& file) {
+  // Brackets inside strings do not nest; a string ends at a quote that no backslash escapes.
+  // Unbalanced closers can only lower the count: the parser stops at the first one anyway.
+  int depth = 0;
+  bool inString = false, escaped = false;
+  for (const char c : text) {
+    if (inString) {
+      if (escaped)
+        escaped = false;
+      else if (c == '\\')
+        escaped = true;
+      else if (c == '"')
+        inString = false;
+    } else if (c == '"') {
+      inString = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonDepth)
+        throw InvalidInputError(file + ": JSON nests deeper than " + std::to_string(kMaxJsonDepth) +
+                                " levels; no glTF asset needs that, so it is refused");
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+}
+
+namespace {
+
+/// The JSON text of a .gltf (the whole file) or of a GLB (its first chunk, clipped to the file).
+std::string_view jsonText(const std::vector<unsigned char>& bytes, bool binary) {
+  const std::string_view all(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  if (!binary) return all;
+  constexpr size_t kHeader = 12, kChunkHeader = 8;  // GLB header; chunk length + type
+  if (all.size() < kHeader + kChunkHeader) return {};
+  uint32_t length = 0;
+  std::memcpy(&length, all.data() + kHeader, sizeof(length));  // little-endian, as GLB is
+  return all.substr(kHeader + kChunkHeader, length);
+}
+
+/// What checkedCapture needs: the caller's image loader and the model tinygltf is filling.
+struct CaptureContext {
+  tinygltf::LoadImageDataFunction capture;
+  ImageBytes* images;
+  const tinygltf::Model* model;
+};
+
+/// Image loader that refuses an image whose bufferView reaches past its buffer before the
+/// caller's loader reads it: tinygltf 2.7 checks the view's and buffer's indices, not the range.
+bool checkedCapture(tinygltf::Image* image, const int index, std::string* error,
+                    std::string* warning, int width, int height, const unsigned char* bytes,
+                    int size, void* user) {
+  const auto& context = *static_cast<const CaptureContext*>(user);
+  if (image->bufferView >= 0) {  // tinygltf has checked both indices before calling
+    const tinygltf::BufferView& view =
+        context.model->bufferViews[static_cast<size_t>(image->bufferView)];
+    const size_t available = context.model->buffers[static_cast<size_t>(view.buffer)].data.size();
+    if (view.byteOffset > available || view.byteLength > available - view.byteOffset) {
+      *error += "image " + std::to_string(index) + ": bufferView " +
+                std::to_string(image->bufferView) + " (bytes " + std::to_string(view.byteOffset) +
+                " + " + std::to_string(view.byteLength) + ") reaches past the end of buffer " +
+                std::to_string(view.buffer) + " (" + std::to_string(available) + " bytes)";
+      return false;
+    }
+  }
+  return context.capture(image, index, error, warning, width, height, bytes, size, context.images);
+}
+
+std::vector<unsigned char> readBytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), {});
+  if (!in && !in.eof()) throw IoError("cannot read " + path.string());
+  return bytes;
+}
+
+}  // namespace
+
 tinygltf::Model loadModel(const std::filesystem::path& path, tinygltf::LoadImageDataFunction capture,
                           ImageBytes& images) {
+  const std::vector<unsigned char> bytes = readBytes(path);
+  if (bytes.empty()) throw InvalidInputError(path.string() + ": the file is empty");
+  if (bytes.size() > std::numeric_limits<unsigned int>::max())  // tinygltf's size type
+    throw UnsupportedError(path.string() + ": glTF files over 4 GiB are not supported");
+  const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+  // tinygltf parses with nlohmann::json and converts the result recursively: a deep enough file
+  // would overflow the stack, so the nesting is bounded before anything is parsed.
+  requireJsonDepth(jsonText(bytes, binary), path.string());
   tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(capture, &images);
   tinygltf::Model model;
+  CaptureContext context{capture, &images, &model};
+  loader.SetImageLoader(checkedCapture, &context);
   std::string error, warning;
-  const bool ok = isBinaryGltf(path)
-                      ? loader.LoadBinaryFromFile(&model, &error, &warning, path.string())
-                      : loader.LoadASCIIFromFile(&model, &error, &warning, path.string());
+  const std::string folder = path.parent_path().string();  // external buffers and images
+  const auto size = static_cast<unsigned int>(bytes.size());
+  const bool ok =
+      binary ? loader.LoadBinaryFromMemory(&model, &error, &warning, bytes.data(), size, folder)
+             : loader.LoadASCIIFromString(&model, &error, &warning,
+                                          reinterpret_cast<const char*>(bytes.data()), size,
+                                          folder);
   if (!ok) {
     while (!error.empty() && error.back() == '\n') error.pop_back();
     if (error.find("File not found") != std::string::npos ||

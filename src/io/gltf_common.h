@@ -6,12 +6,21 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace texgrad::gltf {
 
 /// Encoded bytes of images kept by a tinygltf image loader, by image index.
 using ImageBytes = std::map<int, std::vector<unsigned char>>;
+
+/// Deepest JSON nesting (arrays and objects) a glTF asset may have; glTF itself needs under 10,
+/// the rest is headroom for extensions and extras.
+inline constexpr int kMaxJsonDepth = 64;
+
+/// Throws InvalidInputError naming `file` if `text` nests arrays/objects deeper than
+/// kMaxJsonDepth (a scan without recursion: brackets in strings do not count).
+void requireJsonDepth(std::string_view text, const std::string& file);
 
 /// True if the file starts with the GLB magic "glTF".
 bool isBinaryGltf(const std::filesystem::path& path);
