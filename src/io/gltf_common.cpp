@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "texgrad/core/error.h"
+#include "texgrad/core/json_depth.h"
 
 namespace texgrad::gltf {
 
@@ -55,28 +56,9 @@ std::vector<int> sceneRoots(const tinygltf::Model& model) {
 }
 
 void requireJsonDepth(std::string_view text, const std::string& file) {
-  // Brackets inside strings do not nest; a string ends at a quote that no backslash escapes.
-  // Unbalanced closers can only lower the count: the parser stops at the first one anyway.
-  int depth = 0;
-  bool inString = false, escaped = false;
-  for (const char c : text) {
-    if (inString) {
-      if (escaped)
-        escaped = false;
-      else if (c == '\\')
-        escaped = true;
-      else if (c == '"')
-        inString = false;
-    } else if (c == '"') {
-      inString = true;
-    } else if (c == '[' || c == '{') {
-      if (++depth > kMaxJsonDepth)
-        throw InvalidInputError(file + ": JSON nests deeper than " + std::to_string(kMaxJsonDepth) +
-                                " levels; no glTF asset needs that, so it is refused");
-    } else if (c == ']' || c == '}') {
-      --depth;
-    }
-  }
+  if (jsonNestsDeeperThan(text, kMaxJsonDepth))
+    throw InvalidInputError(file + ": JSON nests deeper than " + std::to_string(kMaxJsonDepth) +
+                            " levels; no glTF asset needs that, so it is refused");
 }
 
 namespace {

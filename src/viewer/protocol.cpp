@@ -6,6 +6,8 @@
 #include <initializer_list>
 #include <nlohmann/json.hpp>
 
+#include "texgrad/core/json_depth.h"
+
 namespace texgrad::viewer {
 namespace {
 
@@ -179,24 +181,7 @@ json parseJson(std::string_view message, size_t maxBytes) {
     throw ProtocolError("message of " + std::to_string(message.size()) +
                         " bytes exceeds the limit of " + std::to_string(maxBytes));
   // Reject deep nesting before parsing: no valid message nests deeper than 3 levels.
-  int depth = 0;
-  bool inString = false, escaped = false;
-  for (char c : message) {
-    if (inString) {
-      if (escaped)
-        escaped = false;
-      else if (c == '\\')
-        escaped = true;
-      else if (c == '"')
-        inString = false;
-    } else if (c == '"') {
-      inString = true;
-    } else if (c == '[' || c == '{') {
-      if (++depth > 4) throw ProtocolError("message nests too deeply");
-    } else if (c == ']' || c == '}') {
-      --depth;
-    }
-  }
+  if (jsonNestsDeeperThan(message, 4)) throw ProtocolError("message nests too deeply");
   json msg = json::parse(message, nullptr, false);
   if (msg.is_discarded()) throw ProtocolError("message is not valid JSON");
   if (!msg.is_object()) throw ProtocolError("message must be a JSON object");
