@@ -327,23 +327,6 @@ FileKind writableKind(const std::filesystem::path& path) {
   return kind;
 }
 
-/// What a kind of file holds, for the message refusing another depth.
-std::string_view formatsHeld(FileKind kind) {
-  switch (kind) {
-    case FileKind::Jpeg:
-      return "8-bit only";
-    case FileKind::Png:
-      return "8 or 16 bits";
-    case FileKind::Exr:
-      return "half or float";
-    case FileKind::Tiff:
-      return "8, 16 bits or float";
-    case FileKind::Unknown:
-      break;
-  }
-  return "";
-}
-
 /// Texel-order floats to file-order samples of type T: clamped to [0, 1] and rounded to the
 /// nearest level for integer T (NaN becomes 0), copied unchanged for float.
 template <typename T>
@@ -462,14 +445,28 @@ PixelFormat writeImage(const std::filesystem::path& path, const Image& image,
   return stored;
 }
 
+namespace {
+
+/// The depths a kind of file stores as asked (storableFormat is the rule), for messages.
+std::string formatsHeld(FileKind kind) {
+  std::string held;
+  for (PixelFormat f :
+       {PixelFormat::UInt8, PixelFormat::UInt16, PixelFormat::Half, PixelFormat::Float})
+    if (storableFormat(kind, f) == f)
+      held += (held.empty() ? "" : ", ") + std::string(pixelFormatName(f));
+  return held;
+}
+
+}  // namespace
+
 void checkImageOutput(const std::filesystem::path& path, std::optional<PixelFormat> requested) {
   const FileKind kind = writableKind(path);
   if (requested && storableFormat(kind, *requested) != *requested)
-    throw InvalidInputError(
-        "cannot write " + path.string() + " as " + std::string(pixelFormatName(*requested)) + ": " +
-        std::string(kindName(kind)) + " holds " + std::string(formatsHeld(kind)) +
-        "; pick another bit depth or extension (.png: 8/16, .exr: "
-        "half/float, .tif: 8/16/float)");
+    throw InvalidInputError("cannot write " + path.string() + " as " +
+                            std::string(pixelFormatName(*requested)) + ": " +
+                            std::string(kindName(kind)) + " holds " + formatsHeld(kind) +
+                            "; pick another bit depth or extension (.png: 8/16, .exr: "
+                            "half/float, .tif: 8/16/float)");
   checkWritableTarget(path);
 }
 
