@@ -251,25 +251,28 @@ class SceneCollector {
   std::vector<int> materials_;  ///< in primitive order
 };
 
-/// Root nodes to draw: the default scene, else scene 0, else every node without a parent.
+/// Adds the image of texture `textureIndex` to `slot` unless the slot already holds that image
+/// (several different images mean several texture pages: readMeshTexture refuses them).
 void addTexture(TexturedMesh& mesh, const tinygltf::Model& model, const ImageBytes& embedded,
                 const std::filesystem::path& folder, const char* slot, int textureIndex) {
-  if (textureIndex < 0 || static_cast<size_t>(textureIndex) >= model.textures.size() ||
-      mesh.texture(slot) != nullptr)
-    return;
+  if (textureIndex < 0 || static_cast<size_t>(textureIndex) >= model.textures.size()) return;
   const int source = model.textures[static_cast<size_t>(textureIndex)].source;
   if (source < 0 || static_cast<size_t>(source) >= model.images.size()) return;
   const tinygltf::Image& image = model.images[static_cast<size_t>(source)];
   TextureRef ref;
   ref.slot = slot;
+  ref.origin = "image " + std::to_string(source);
   if (!image.uri.empty()) {
     ref.path = (folder / percentDecode(image.uri)).lexically_normal();
+    ref.origin += " (URI '" + image.uri + "')";
   } else {
     const auto it = embedded.find(source);
     if (it == embedded.end()) return;
     ref.embedded = it->second;
     ref.mimeType = image.mimeType;
   }
+  for (const TextureRef& t : mesh.textures)
+    if (t.slot == ref.slot && t.path == ref.path && t.embedded == ref.embedded) return;
   mesh.textures.push_back(std::move(ref));
 }
 

@@ -4,9 +4,9 @@
 //
 // Layout of the output:
 //  * .glb  - self-contained: all buffers are merged into buffer 0 (the BIN chunk) and every image
-//            is stored in a bufferView. Source images that cannot be embedded (file missing, or
-//            content that is not PNG/JPEG/WebP/KTX2/DDS) stay referenced by a URI relative to
-//            the target's folder.
+//            is stored in a bufferView. Source images that cannot be embedded (content that is
+//            not PNG/JPEG/WebP/KTX2/DDS) stay referenced by a URI relative to the target's
+//            folder. A source image file that is missing is an error (never a dangling URI).
 //  * .gltf - single file: every buffer is embedded as a base64 data URI (no sidecar .bin, so the
 //            one atomic rename publishes the whole asset). Embedded source images and the new
 //            texture live in bufferViews of buffer 0; external source images are referenced by
@@ -455,6 +455,11 @@ void writeGltfWithTexture(const fs::path& source, const fs::path& target, const 
     }
     if (external) {
       const fs::path file = (sourceFolder / percentDecode(img.uri)).lexically_normal();
+      if (!fs::exists(file))
+        throw IoError(source.string() + ": image " + std::to_string(i) + " (URI '" + img.uri +
+                      "') was not found at " + file.string() +
+                      ", so the output would refer to a missing file; restore the image file "
+                      "or fix the URI");
       img.uri = relativeUri(file, targetFolder);
     } else {
       throw InvalidInputError(source.string() + ": image " + std::to_string(i) +

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <vector>
 
 #include "texgrad/core/error.h"
 #include "texgrad/io/atomic_file.h"
@@ -12,9 +13,43 @@
 
 namespace texgrad {
 
+namespace {
+
+/// The mesh's distinct textures in `slot`, in the reader's order.
+std::vector<const TextureRef*> slotTextures(const TexturedMesh& mesh, const std::string& slot) {
+  std::vector<const TextureRef*> refs;
+  for (const TextureRef& t : mesh.textures)
+    if (t.slot == slot) refs.push_back(&t);
+  return refs;
+}
+
+/// How a message names a texture: where the file names it, else its file.
+std::string describe(const TextureRef& ref) {
+  if (!ref.origin.empty()) return ref.origin;
+  return ref.path.empty() ? "an embedded image" : "'" + ref.path.string() + "'";
+}
+
+}  // namespace
+
 std::optional<Image> readMeshTexture(const TexturedMesh& mesh, const std::string& slot) {
-  const TextureRef* ref = mesh.texture(slot);
-  if (ref == nullptr) return std::nullopt;
+  const std::vector<const TextureRef*> refs = slotTextures(mesh, slot);
+  const std::string file = mesh.sourcePath.string();
+  if (refs.empty() && !mesh.missingFiles.empty())
+    throw IoError(mesh.missingFiles.front() + ", so the mesh's " + slot +
+                  " texture is unknown; restore the file or pass the texture as an argument");
+  if (refs.empty()) return std::nullopt;
+  if (refs.size() > 1) {
+    std::string list;
+    for (const TextureRef* ref : refs) list += (list.empty() ? "" : ", ") + describe(*ref);
+    throw UnsupportedError(file + ": its faces use " + std::to_string(refs.size()) + " different " +
+                           slot + " textures (" + list +
+                           "), and only one texture page is supported; give every face one "
+                           "material, or pass the texture to process as an argument");
+  }
+  const TextureRef* ref = refs.front();
+  if (!ref->path.empty() && !std::filesystem::exists(ref->path))
+    throw IoError(file + ": " + describe(*ref) + ", the " + slot + " texture, was not found at " +
+                  ref->path.string() + "; restore the image file or fix the reference");
   if (!ref->path.empty()) return readImage(ref->path);
   return readImageFromMemory(ref->embedded,
                              mesh.sourcePath.string() + " (embedded " + slot + " texture)");

@@ -3,12 +3,9 @@
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
-#include <charconv>
-#include <cmath>
-#include <fstream>
-#include <sstream>
 #include <string>
 
+#include "obj_lines.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/mesh_reader.h"
 
@@ -40,58 +37,46 @@ std::vector<size_t> materialOrder(const std::vector<tinyobj::shape_t>& shapes,
   return order;
 }
 
+/// True if two references name the same image (same file, or the same embedded bytes).
+bool sameImage(const TextureRef& a, const TextureRef& b) {
+  return a.path == b.path && a.embedded == b.embedded;
+}
+
+/// Adds the slot textures of the materials faces use, each distinct image once (several mean
+/// several texture pages: readMeshTexture refuses them); unused materials only fill empty slots.
 void addTextures(TexturedMesh& mesh, const std::filesystem::path& path,
                  const std::vector<tinyobj::shape_t>& shapes,
                  const std::vector<tinyobj::material_t>& materials) {
-  const auto addSlot = [&](const char* slot, const std::string& name) {
-    if (name.empty() || mesh.texture(slot) != nullptr) return;
+  std::vector<bool> used(materials.size(), false);
+  for (const auto& shape : shapes)
+    for (int id : shape.mesh.material_ids)
+      if (id >= 0 && static_cast<size_t>(id) < materials.size())
+        used[static_cast<size_t>(id)] = true;
+  const auto addSlot = [&](const char* slot, const char* keyword, const std::string& name,
+                           const tinyobj::material_t& m, bool isUsed) {
+    if (name.empty() || (!isUsed && mesh.texture(slot) != nullptr)) return;
     TextureRef ref;
     ref.slot = slot;
     ref.path = resolveTexture(path, name);
+    ref.origin = "material '" + m.name + "' (" + keyword + " '" + name + "')";
+    for (const TextureRef& t : mesh.textures)
+      if (t.slot == ref.slot && sameImage(t, ref)) return;
     mesh.textures.push_back(std::move(ref));
   };
   for (size_t id : materialOrder(shapes, materials.size())) {
     const tinyobj::material_t& m = materials[id];
-    addSlot("baseColor", m.diffuse_texname);
-    addSlot("normal", m.normal_texname);
-    addSlot("normal", m.bump_texname);
-  }
-}
-
-/// tinyobjloader reads "nan", "inf" and other non-numbers as 0, so the 'v' and 'vt' lines are
-/// checked here first: every coordinate must be a finite number.
-void checkCoordinates(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::string line;
-  size_t vertex = 0, uv = 0;
-  for (size_t lineNumber = 1; std::getline(in, line); ++lineNumber) {
-    std::istringstream words(line);
-    std::string keyword;
-    words >> keyword;
-    const bool isVertex = keyword == "v";
-    if (!isVertex && keyword != "vt") continue;
-    const std::string what = isVertex ? "vertex " + std::to_string(vertex++)
-                                      : "texture coordinate " + std::to_string(uv++);
-    std::string token;
-    for (int c = 0; c < (isVertex ? 3 : 2) && words >> token; ++c) {
-      double value = 0.0;
-      const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-      const bool number = ec == std::errc() && end == token.data() + token.size();
-      if (!number || !std::isfinite(value))
-        throw InvalidInputError(path.string() + " line " + std::to_string(lineNumber) + ": " +
-                                what + " has coordinate '" + token + "'" +
-                                (number ? ", which is not finite" : ", which is not a number") +
-                                "; fix or remove it in the mesh file");
-    }
+    addSlot("baseColor", "map_Kd", m.diffuse_texname, m, used[id]);
+    addSlot("normal", "norm", m.normal_texname, m, used[id]);
+    if (m.normal_texname.empty()) addSlot("normal", "bump", m.bump_texname, m, used[id]);
   }
 }
 
 /// Checks one face corner and returns its (vertex, uv) indices.
-std::pair<int32_t, int32_t> corner(const tinyobj::index_t& index, size_t face, size_t k,
+std::pair<int32_t, int32_t> corner(const tinyobj::index_t& index, size_t line, size_t k,
                                    size_t vertexCount, size_t uvCount,
                                    const std::filesystem::path& path) {
-  const std::string where = path.string() + ": face " + std::to_string(face) + " (0-based, in " +
-                            "file order) corner " + std::to_string(k);
+  const std::string where =
+      path.string() + " line " + std::to_string(line) + ": face corner " + std::to_string(k);
   if (index.vertex_index < 0 || static_cast<size_t>(index.vertex_index) >= vertexCount)
     throw InvalidInputError(where + " references vertex " + std::to_string(index.vertex_index) +
                             " but there are " + std::to_string(vertexCount) +
@@ -116,7 +101,7 @@ std::pair<int32_t, int32_t> corner(const tinyobj::index_t& index, size_t face, s
 
 TexturedMesh readObj(const std::filesystem::path& path) {
   requireReadableFile(path);
-  checkCoordinates(path);
+  const obj::ObjLines lines = obj::scanObjLines(path);
   tinyobj::ObjReaderConfig config;
   config.triangulate = false;  // fanned below, after the indices are checked
   config.vertex_color = false;
@@ -148,16 +133,16 @@ TexturedMesh readObj(const std::filesystem::path& path) {
   for (const tinyobj::shape_t& shape : reader.GetShapes()) {
     size_t offset = 0;
     for (unsigned char n : shape.mesh.num_face_vertices) {
-      if (n < 3)
-        throw InvalidInputError(path.string() + ": face " + std::to_string(face) + " has " +
-                                std::to_string(n) + " corners; faces need at least 3");
+      // The line scan refused faces with fewer than 3 corners, so tinyobjloader dropped none
+      // and faces map one-to-one onto 'f' lines.
+      const size_t line = face < lines.faceLines.size() ? lines.faceLines[face] : 0;
       if (offset + n > shape.mesh.indices.size())
         throw UnsupportedError(path.string() + ": face " + std::to_string(face) +
                                " has more than 255 corners; triangulate it before reading");
       corners.clear();
       for (size_t k = 0; k < n; ++k)
         corners.push_back(
-            corner(shape.mesh.indices[offset + k], face, k, vertexCount, uvCount, path));
+            corner(shape.mesh.indices[offset + k], line, k, vertexCount, uvCount, path));
       for (size_t k = 1; k + 1 < n; ++k) {
         mesh.triangles.push_back({corners[0].first, corners[k].first, corners[k + 1].first});
         mesh.uvTriangles.push_back({corners[0].second, corners[k].second, corners[k + 1].second});
@@ -167,6 +152,7 @@ TexturedMesh readObj(const std::filesystem::path& path) {
     }
   }
   addTextures(mesh, path, reader.GetShapes(), reader.GetMaterials());
+  mesh.missingFiles = lines.missingFiles;
   validateMesh(mesh, path.string());
   mesh.sourcePath = path;
   return mesh;

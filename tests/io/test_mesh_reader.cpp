@@ -266,16 +266,16 @@ TEST(MeshReader, ObjQuadNegativeIndicesAndMtl) {
   EXPECT_EQ(mesh.texture("normal")->path, fs::absolute(dir / "bump.png"));
 }
 
-TEST(MeshReader, ObjOutOfRangeIndexNamesFace) {
+TEST(MeshReader, ObjOutOfRangeIndexNamesLine) {
   const fs::path dir = test::tempDir("obj_range");
   const fs::path obj = writeFile(dir, "bad.obj",
                                  "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\n"
                                  "f 1/1 2/1 3/1\nf 1/1 2/1 3/1\nf 1/1 2/1 9/1\n");
   const std::string message = messageOf<InvalidInputError>([&] { readMesh(obj); });
   EXPECT_NE(message.find("bad.obj"), std::string::npos) << message;
-  EXPECT_NE(message.find("face 2"), std::string::npos) << message;
-  EXPECT_NE(message.find("vertex 8"), std::string::npos) << message;
-  EXPECT_NE(message.find("3 vertices"), std::string::npos) << message;
+  EXPECT_NE(message.find("bad.obj line 7"), std::string::npos) << message;
+  EXPECT_NE(message.find("vertex 9"), std::string::npos) << message;
+  EXPECT_NE(message.find("has 3"), std::string::npos) << message;
 }
 
 TEST(MeshReader, ObjNanCoordinateThrows) {

@@ -13,7 +13,9 @@ namespace texgrad {
 
 /// The image of the mesh's `slot` texture ("baseColor", "normal", ...), read from the file the
 /// mesh names or decoded from the bytes embedded in its asset; nullopt if it names no such
-/// texture. Throws IoError / InvalidInputError naming the file if the image cannot be read.
+/// texture. Throws IoError naming the mesh file and the reference if the image (or the .mtl that
+/// would name it) is missing, InvalidInputError if it cannot be decoded, and UnsupportedError if
+/// the faces use several different images in the slot (one texture page only).
 std::optional<Image> readMeshTexture(const TexturedMesh& mesh,
                                      const std::string& slot = "baseColor");
 

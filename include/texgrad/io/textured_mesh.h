@@ -20,6 +20,7 @@ struct TextureRef {
   std::filesystem::path path;            ///< resolved absolute path, empty if embedded
   std::vector<unsigned char> embedded;   ///< encoded image bytes (glTF bufferView / data URI)
   std::string mimeType;                  ///< e.g. "image/png" for embedded images
+  std::string origin;  ///< where the file names it, for messages: "material 'red' (map_Kd 'r.png')"
 };
 
 /// Triangle mesh with per-corner texture coordinates (OBJ-style separate index spaces).
@@ -32,12 +33,14 @@ struct TexturedMesh {
   std::vector<Eigen::Vector2d> uvs;        ///< texture coordinates, unit square = atlas
   std::vector<Triangle> triangles;         ///< per face: indices into positions
   std::vector<Triangle> uvTriangles;       ///< per face: indices into uvs
-  std::vector<TextureRef> textures;        ///< textures the file references, by slot
+  std::vector<TextureRef> textures;        ///< textures the file references (distinct per slot)
+  std::vector<std::string> missingFiles;   ///< files the mesh names but that are absent (a .mtl)
   std::filesystem::path sourcePath;        ///< file it was read from (empty if procedural)
 
   /// Number of faces.
   size_t faceCount() const { return triangles.size(); }
-  /// Texture reference for a slot ("baseColor", "normal", ...), if the file names one.
+  /// First texture reference for a slot ("baseColor", "normal", ...), if the file names one;
+  /// faces may use several (textures holds each distinct one), see readMeshTexture.
   const TextureRef* texture(std::string_view slot) const {
     for (const auto& t : textures)
       if (t.slot == slot) return &t;

@@ -1,0 +1,112 @@
+// No silent partial reads (issue 27): each input a reader used to accept with part of it lost
+// is refused with a typed exception whose message names the file and the line or element.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "silent_read_fixtures.h"
+#include "test_paths.h"
+#include "texgrad/core/error.h"
+#include "texgrad/io/image_io.h"
+#include "texgrad/io/mesh_reader.h"
+#include "texgrad/io/mesh_texture.h"
+
+namespace texgrad::silent_reads_test {
+
+namespace fs = std::filesystem;
+namespace fx = test::fixtures;
+
+/// The message of the E that `action` throws ("" and a test failure if it throws none).
+template <typename E, typename F>
+std::string thrown(F&& action) {
+  try {
+    action();
+  } catch (const E& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no exception of the expected type";
+  return "";
+}
+
+/// Expects every one of `parts` in `message`.
+void expectNames(const std::string& message, std::initializer_list<std::string> parts) {
+  for (const std::string& part : parts)
+    EXPECT_NE(message.find(part), std::string::npos) << "missing '" << part << "' in: " << message;
+}
+
+/// A small 8-bit RGB image (contents do not matter).
+void writePng(const fs::path& path) {
+  writeImage(path, Image(4, 4, 3, PixelFormat::UInt8));
+}
+
+TEST(SilentReads, ObjCutInAFaceLineNamesTheLine) {
+  const fs::path obj = fx::write(test::tempDir("silent_cut"), "cut.obj", fx::truncatedObj());
+  expectNames(thrown<InvalidInputError>([&] { readMesh(obj); }), {"cut.obj line 10", "2 corners"});
+}
+
+TEST(SilentReads, ObjMalformedCornersNameTheLine) {
+  const fs::path dir = test::tempDir("silent_corner");
+  for (const char* face : {"f 1/1 2/x 3/3\n", "f 1/1 2/2 3.5/3\n", "f 1/1 0/2 3/3\n",
+                           "f 1/1 2/2 -9/3\n", "f 1/1 2/2 3/3/3/3\n"}) {
+    const fs::path obj = fx::write(dir, "bad.obj", fx::squareObj("", face));
+    expectNames(thrown<InvalidInputError>([&] { readMesh(obj); }), {"bad.obj line 9"});
+  }
+  const fs::path far = fx::write(dir, "far.obj", fx::squareObj("", "f 1/1 2/2 3/7\n"));
+  expectNames(thrown<InvalidInputError>([&] { readMesh(far); }),
+              {"far.obj line 9", "texture coordinate 7", "has 4"});
+}
+
+TEST(SilentReads, TwoMaterialsWithTwoTexturesAreRefusedByName) {
+  const fs::path dir = test::tempDir("silent_two");
+  fx::write(dir, "two.mtl", fx::twoMaterialMtl("red.png", "blue.png"));
+  writePng(dir / "red.png");
+  writePng(dir / "blue.png");
+  const TexturedMesh mesh = readMesh(fx::write(dir, "two.obj", fx::twoMaterialObj()));
+  EXPECT_EQ(mesh.faceCount(), 2u);
+  expectNames(thrown<UnsupportedError>([&] { readMeshTexture(mesh, "baseColor"); }),
+              {"two.obj", "2 different baseColor textures", "material 'red' (map_Kd 'red.png')",
+               "material 'blue' (map_Kd 'blue.png')"});
+}
+
+TEST(SilentReads, TwoMaterialsSharingATextureAreRead) {
+  const fs::path dir = test::tempDir("silent_shared");
+  fx::write(dir, "two.mtl", fx::twoMaterialMtl("same.png", "same.png"));
+  writePng(dir / "same.png");
+  const TexturedMesh mesh = readMesh(fx::write(dir, "two.obj", fx::twoMaterialObj()));
+  const std::optional<Image> texture = readMeshTexture(mesh, "baseColor");
+  ASSERT_TRUE(texture.has_value());
+  EXPECT_EQ(texture->width, 4);
+}
+
+TEST(SilentReads, MissingMtlNamesTheMtllibLine) {
+  const fs::path dir = test::tempDir("silent_mtl");
+  const TexturedMesh mesh = readMesh(fx::write(dir, "nomtl.obj", fx::missingMtlObj()));
+  ASSERT_EQ(mesh.missingFiles.size(), 1u);
+  expectNames(thrown<IoError>([&] { readMeshTexture(mesh, "baseColor"); }),
+              {"nomtl.obj line 1", "'gone.mtl'", "was not found"});
+}
+
+TEST(SilentReads, MissingGltfImageNamesAssetIndexAndUri) {
+  const fs::path dir = test::tempDir("silent_gltf_read");
+  const fs::path gltf = fx::write(dir, "m.gltf", fx::triangleGltf("gone.png", "normal.png"));
+  writePng(dir / "normal.png");
+  const TexturedMesh mesh = readMesh(gltf);
+  expectNames(thrown<IoError>([&] { readMeshTexture(mesh, "baseColor"); }),
+              {"m.gltf", "image 0", "URI 'gone.png'"});
+  EXPECT_TRUE(readMeshTexture(mesh, "normal").has_value());  // only the slot processed matters
+}
+
+TEST(SilentReads, GltfWriteBackNeverLeavesADanglingUri) {
+  const fs::path dir = test::tempDir("silent_gltf_write");
+  const fs::path gltf = fx::write(dir, "m.gltf", fx::triangleGltf("color.png", "gone.png"));
+  writePng(dir / "color.png");
+  const TexturedMesh mesh = readMesh(gltf);
+  const Image image = *readMeshTexture(mesh, "baseColor");
+  for (const char* name : {"out.gltf", "out.glb"}) {
+    expectNames(thrown<IoError>([&] { writeMeshTexture(dir / name, mesh, image); }),
+                {"m.gltf", "image 1", "URI 'gone.png'"});
+    EXPECT_FALSE(fs::exists(dir / name));
+  }
+}
+
+}  // namespace texgrad::silent_reads_test
