@@ -1,4 +1,5 @@
 // `texgrad info`: prints the atlas diagnostics of a mesh (text or JSON); no processing.
+#include <algorithm>
 #include <iostream>
 
 #include "cli_common.h"
@@ -65,7 +66,43 @@ void printIds(const AtlasIssue& issue, int maxIds) {
   std::cout << "\n";
 }
 
-void printText(const std::string& name, const AtlasReport& r, int maxIds) {
+/// The textures the mesh file names (each distinct image per slot) and the files it names that
+/// are missing: reported, not refused, since `info` processes no texture.
+nlohmann::json texturesJson(const TexturedMesh& mesh) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const TextureRef& t : mesh.textures)
+    list.push_back(
+        {{"slot", t.slot},
+         {"file", t.path.empty() ? nlohmann::json(nullptr) : nlohmann::json(t.path.string())},
+         {"named_by", t.origin}});
+  return list;
+}
+
+/// Slots in which the faces use several different images (processing refuses those).
+std::vector<std::string> multiPageSlots(const TexturedMesh& mesh) {
+  std::vector<std::string> slots;
+  for (const TextureRef& t : mesh.textures)
+    if (mesh.texture(t.slot) != &t && std::find(slots.begin(), slots.end(), t.slot) == slots.end())
+      slots.push_back(t.slot);
+  return slots;
+}
+
+/// Prints the textures and missing files; returns true if there is anything to warn about.
+bool printTextures(const TexturedMesh& mesh) {
+  for (const TextureRef& t : mesh.textures)
+    std::cout << "  " << t.slot
+              << " texture: " << (t.path.empty() ? std::string("embedded") : t.path.string())
+              << (t.origin.empty() ? "" : ", named by " + t.origin) << "\n";
+  for (const std::string& missing : mesh.missingFiles) std::cout << "  warning " << missing << "\n";
+  const std::vector<std::string> slots = multiPageSlots(mesh);
+  for (const std::string& slot : slots)
+    std::cout << "  warning the faces use several different " << slot
+              << " textures; commands that process it refuse the mesh (one texture page only)\n";
+  return !mesh.missingFiles.empty() || !slots.empty();
+}
+
+void printText(const std::string& name, const AtlasReport& r, const TexturedMesh& mesh,
+               int maxIds) {
   std::cout << name << "\n"
             << "  vertices " << r.vertices << ", uv vertices " << r.uvVertices << ", faces "
             << r.faces << ", surface components " << r.connectedComponents << "\n"
@@ -83,7 +120,8 @@ void printText(const std::string& name, const AtlasReport& r, int maxIds) {
               << ", texels meeting two charts: " << t.multiChartTexels
               << ", active texels outside the image: " << t.texelsOutsideImage << "\n";
   }
-  if (r.issues.empty()) std::cout << "  no problems found\n";
+  const bool textureWarnings = printTextures(mesh);
+  if (r.issues.empty() && !textureWarnings) std::cout << "  no problems found\n";
   for (const AtlasIssue& issue : r.issues) {
     std::cout << "  " << (issue.blocking ? "ERROR " : "warning ") << issue.kind << " ("
               << issue.ids.size() << "): " << issue.meaning << "\n";
@@ -108,9 +146,11 @@ void runInfo(const InfoArgs& args) {
   if (args.json) {
     nlohmann::json j = atlasJson(report);
     j["mesh"] = args.mesh;
+    j["textures"] = texturesJson(mesh);
+    j["missing_files"] = mesh.missingFiles;
     printJson(j);
   } else {
-    printText(args.mesh, report, args.maxIds);
+    printText(args.mesh, report, mesh, args.maxIds);
   }
 }
 

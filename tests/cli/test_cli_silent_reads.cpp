@@ -1,0 +1,84 @@
+// CLI contract for the inputs readers used to accept with part of them silently lost (issue 27):
+// one line on stderr naming the file and line or element, non-zero status, no output file.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "cli_runner.h"
+#include "silent_read_fixtures.h"
+#include "test_paths.h"
+#include "texgrad/io/image.h"
+#include "texgrad/io/image_io.h"
+
+namespace texgrad::test::cli_silent_reads {
+
+namespace fs = std::filesystem;
+
+/// Runs `args` in `dir` and expects the bad-input contract with every one of `parts` named.
+void expectRefused(const std::vector<std::string>& args, const fs::path& dir,
+                   const std::string& output, std::initializer_list<std::string> parts) {
+  const CliResult r = runCli(args, dir);
+  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(lineCount(r.err), 1) << r.err;
+  for (const std::string& part : parts)
+    EXPECT_NE(r.err.find(part), std::string::npos) << "missing '" << part << "' in: " << r.err;
+  EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
+  if (!output.empty()) {
+    EXPECT_FALSE(fs::exists(dir / output));
+  }
+}
+
+void writePng(const fs::path& path) {
+  writeImage(path, Image(8, 8, 3, PixelFormat::UInt8));
+}
+
+TEST(CliSilentReads, TruncatedFaceIsAnErrorNotDropped) {
+  const fs::path dir = tempDir("cli_silent_cut");
+  fixtures::write(dir, "cut.obj", fixtures::truncatedObj());
+  expectRefused({"info", "cut.obj"}, dir, "", {"cut.obj line 10", "2 corners"});
+  expectRefused({"mask", "cut.obj", "-r", "8", "--out", "out.png"}, dir, "out.png",
+                {"cut.obj line 10"});
+}
+
+TEST(CliSilentReads, TwoMaterialsWithTwoTexturesAreRefusedAndListedByInfo) {
+  const fs::path dir = tempDir("cli_silent_two");
+  fixtures::write(dir, "two.mtl", fixtures::twoMaterialMtl("red.png", "blue.png"));
+  fixtures::write(dir, "two.obj", fixtures::twoMaterialObj());
+  writePng(dir / "red.png");
+  writePng(dir / "blue.png");
+  expectRefused(
+      {"filter", "two.obj", "--out", "out.png"}, dir, "out.png",
+      {"two.obj", "material 'red' (map_Kd 'red.png')", "material 'blue' (map_Kd 'blue.png')"});
+  const CliResult info = runCli({"info", "two.obj"}, dir);
+  EXPECT_EQ(info.status, 0) << info.err;
+  for (const char* part : {"red.png, named by material 'red'", "blue.png, named by material 'blue'",
+                           "several different baseColor textures"})
+    EXPECT_NE(info.out.find(part), std::string::npos)
+        << "missing '" << part << "' in: " << info.out;
+  EXPECT_EQ(info.out.find("no problems found"), std::string::npos) << info.out;
+}
+
+TEST(CliSilentReads, MissingMtlNamesTheMtllibLine) {
+  const fs::path dir = tempDir("cli_silent_mtl");
+  fixtures::write(dir, "nomtl.obj", fixtures::missingMtlObj());
+  expectRefused({"filter", "nomtl.obj", "--out", "out.png"}, dir, "out.png",
+                {"nomtl.obj line 1", "'gone.mtl'", "was not found"});
+  const CliResult info = runCli({"info", "nomtl.obj"}, dir);
+  EXPECT_EQ(info.status, 0) << info.err;
+  EXPECT_NE(info.out.find("gone.mtl"), std::string::npos) << info.out;
+  EXPECT_EQ(info.out.find("no problems found"), std::string::npos) << info.out;
+}
+
+TEST(CliSilentReads, MissingGltfImageIsNamedAndNeverWrittenBack) {
+  const fs::path dir = tempDir("cli_silent_gltf");
+  fixtures::write(dir, "nocolor.gltf", fixtures::triangleGltf("gone.png", "normal.png"));
+  writePng(dir / "normal.png");
+  expectRefused({"filter", "nocolor.gltf", "--out", "out.gltf"}, dir, "out.gltf",
+                {"nocolor.gltf", "image 0", "URI 'gone.png'"});
+  fixtures::write(dir, "nonormal.gltf", fixtures::triangleGltf("color.png", "gone.png"));
+  writePng(dir / "color.png");
+  expectRefused({"filter", "nonormal.gltf", "--out", "out.gltf"}, dir, "out.gltf",
+                {"nonormal.gltf", "image 1", "URI 'gone.png'"});
+}
+
+}  // namespace texgrad::test::cli_silent_reads
