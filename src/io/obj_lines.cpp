@@ -67,7 +67,7 @@ void checkCorner(const std::string& token, const std::array<size_t, 2>& counts,
     if (field == 2) continue;  // normals are not used
     const auto which = static_cast<size_t>(field);
     const char* kind = field == 0 ? "vertex" : "texture coordinate";
-    if (index < 0 && static_cast<size_t>(-index) > counts[which])
+    if (index < -static_cast<long>(counts[which]))  // not -index: LONG_MIN has no negation
       fail("refers to " + std::string(kind) + " " + std::to_string(index) + " but only " +
            std::to_string(counts[which]) + " precede it");
     if (index > max[which].value) max[which] = {index, line};

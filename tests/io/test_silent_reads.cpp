@@ -46,8 +46,9 @@ TEST(SilentReads, ObjCutInAFaceLineNamesTheLine) {
 
 TEST(SilentReads, ObjMalformedCornersNameTheLine) {
   const fs::path dir = test::tempDir("silent_corner");
-  for (const char* face : {"f 1/1 2/x 3/3\n", "f 1/1 2/2 3.5/3\n", "f 1/1 0/2 3/3\n",
-                           "f 1/1 2/2 -9/3\n", "f 1/1 2/2 3/3/3/3\n"}) {
+  for (const char* face :
+       {"f 1/1 2/x 3/3\n", "f 1/1 2/2 3.5/3\n", "f 1/1 0/2 3/3\n", "f 1/1 2/2 -9/3\n",
+        "f 1/1 2/2 -9223372036854775808/3\n", "f 1/1 2/2 3/3/3/3\n"}) {
     const fs::path obj = fx::write(dir, "bad.obj", fx::squareObj("", face));
     expectNames(thrown<InvalidInputError>([&] { readMesh(obj); }), {"bad.obj line 9"});
   }
