@@ -1,5 +1,6 @@
 // `texgrad info`: prints the atlas diagnostics of a mesh (text or JSON); no processing.
 #include <algorithm>
+#include <filesystem>
 #include <iostream>
 
 #include "cli_common.h"
@@ -93,12 +94,19 @@ bool printTextures(const TexturedMesh& mesh) {
     std::cout << "  " << t.slot
               << " texture: " << (t.path.empty() ? std::string("embedded") : t.path.string())
               << (t.origin.empty() ? "" : ", named by " + t.origin) << "\n";
+  bool missingImage = false;
+  for (const TextureRef& t : mesh.textures)
+    if (!t.path.empty() && !std::filesystem::exists(t.path)) {
+      std::cout << "  warning the " << t.slot << " image " << t.path.string() << " (" << t.origin
+                << ") was not found\n";
+      missingImage = true;
+    }
   for (const std::string& missing : mesh.missingFiles) std::cout << "  warning " << missing << "\n";
   const std::vector<std::string> slots = multiPageSlots(mesh);
   for (const std::string& slot : slots)
     std::cout << "  warning the faces use several different " << slot
               << " textures; commands that process it refuse the mesh (one texture page only)\n";
-  return !mesh.missingFiles.empty() || !slots.empty();
+  return missingImage || !mesh.missingFiles.empty() || !slots.empty();
 }
 
 void printText(const std::string& name, const AtlasReport& r, const TexturedMesh& mesh,

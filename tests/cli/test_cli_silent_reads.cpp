@@ -75,6 +75,11 @@ TEST(CliSilentReads, MissingGltfImageIsNamedAndNeverWrittenBack) {
   writePng(dir / "normal.png");
   expectRefused({"filter", "nocolor.gltf", "--out", "out.gltf"}, dir, "out.gltf",
                 {"nocolor.gltf", "image 0", "URI 'gone.png'"});
+  const CliResult info = runCli({"info", "nocolor.gltf"}, dir);
+  EXPECT_EQ(info.status, 0) << info.err;
+  EXPECT_NE(info.out.find("image 0 (URI 'gone.png')) was not found"), std::string::npos)
+      << info.out;
+  EXPECT_EQ(info.out.find("no problems found"), std::string::npos) << info.out;
   fixtures::write(dir, "nonormal.gltf", fixtures::triangleGltf("color.png", "gone.png"));
   writePng(dir / "color.png");
   expectRefused({"filter", "nonormal.gltf", "--out", "out.gltf"}, dir, "out.gltf",

@@ -67,7 +67,8 @@ inline std::string base64(const std::string& bytes) {
 /// A one-triangle .gltf (geometry in a data URI) whose material has a baseColor texture (image 0,
 /// file `baseColorUri`) and a normal texture (image 1, file `normalUri`); neither file is written.
 inline std::string triangleGltf(const std::string& baseColorUri, const std::string& normalUri) {
-  const std::vector<float> floats = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.1f, 0.1f, 0.9f, 0.1f, 0.1f, 0.9f};
+  // UVs with glTF's v downward, so the triangle is counter-clockwise in the atlas too.
+  const std::vector<float> floats = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.1f, 0.9f, 0.9f, 0.9f, 0.1f, 0.1f};
   std::string bin(floats.size() * sizeof(float), '\0');
   std::memcpy(bin.data(), floats.data(), bin.size());
   for (uint16_t i : {uint16_t{0}, uint16_t{1}, uint16_t{2}})
