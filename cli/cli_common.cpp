@@ -407,9 +407,14 @@ std::string bitDepthHelp(const std::string& defaultText) {
 }
 
 PixelFormat writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const Image& image,
-                               const std::string& slot, const std::string& bitDepth) {
+                               const std::string& slot, const std::string& bitDepth, bool quiet) {
   requireGltfMeshFor(out, mesh.sourcePath);
-  return writeMeshTexture(out, mesh, image, slot, requestedFormat(bitDepth));
+  const WrittenTexture written =
+      writeMeshTexture(out, mesh, image, slot, requestedFormat(bitDepth));
+  if (!quiet)
+    for (const std::string& warning : written.warnings)
+      std::cerr << "texgrad: warning: " << warning << "\n";
+  return written.stored;
 }
 
 namespace {

@@ -110,9 +110,10 @@ nlohmann::json toJson(const SolveReport& report);
 
 /// Writes a processed texture with writeMeshTexture (an image file, or a copy of the mesh's glTF
 /// asset when `out` ends in .gltf/.glb); `bitDepth` as parsePixelFormat, empty: the image's.
-/// Returns the pixel format stored.
+/// Unless `quiet`, prints its warnings (source images a glTF copy left out) on stderr, one line
+/// each. Returns the pixel format stored.
 PixelFormat writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const Image& image,
-                               const std::string& slot, const std::string& bitDepth);
+                               const std::string& slot, const std::string& bitDepth, bool quiet);
 
 /// --bit-depth's value as a format; nullopt when empty (the command's default).
 std::optional<PixelFormat> requestedFormat(const std::string& bitDepth);

@@ -1,5 +1,5 @@
 // `texgrad dilate`: pads the gutters of a texture (seam-aware first ring, then averaging rings).
-#include <iostream>
+#include <cstdint>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -7,31 +7,56 @@
 #include "texgrad/atlas/atlas.h"
 #include "texgrad/atlas/image_coverage.h"
 #include "texgrad/atlas/texel_grid.h"
-#include "texgrad/io/image_io.h"
 
 namespace texgrad::cli {
 namespace {
 
 struct DilateArgs {
-  std::string mesh, texture, out, bitDepth;
+  std::string mesh, texture, out, slot = "baseColor", bitDepth;
   DilateOptions options;
+  ReportArgs report;
   double weldTolerance = 0.0;
-  bool quiet = false;
 };
+
+/// Image texels whose value the padding changed (all in the gutter: active texels are kept).
+int64_t changedTexels(const Image& before, const Image& after) {
+  int64_t changed = 0;
+  for (int j = 0; j < before.height; ++j)
+    for (int i = 0; i < before.width; ++i)
+      for (int c = 0; c < before.channels; ++c)
+        if (before.at(i, j, c) != after.at(i, j, c)) {
+          ++changed;
+          break;
+        }
+  return changed;
+}
 
 void runDilate(const DilateArgs& args) {
   args.options.validate();
-  checkImageOutputArgs(args.out, args.bitDepth);
+  checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   StageTimer timer;
   const TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   requireUvsInImage(mesh);
-  const Image texture = loadTexture(mesh, args.mesh, args.texture);
+  const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
+  timer.lap("read");
   const Atlas atlas = buildAtlas(mesh);
   const TexelGrid grid = buildTexelGrid(mesh, atlas, texture.width, texture.height);
   const Image padded = dilateGutters(mesh, atlas, grid, texture, args.options);
-  const PixelFormat stored = writeImage(args.out, padded, requestedFormat(args.bitDepth));
+  timer.lap("dilate");
+  const PixelFormat stored =
+      writeTextureOutput(args.out, mesh, padded, args.slot, args.bitDepth, args.report.quiet);
   timer.lap("write");
-  printWritten(args.quiet, args.out, padded, stored, -1, timer.total());
+  printWritten(args.report.quiet, args.out, padded, stored, -1, timer.total());
+  if (args.report.timings) timer.print();
+  if (args.report.json)
+    printJson({{"command", "dilate"},
+               {"texels", grid.unknownCount()},
+               {"resolution", {texture.width, texture.height}},
+               {"radius", args.options.infinite ? nlohmann::json("infinite")
+                                                : nlohmann::json(args.options.radius)},
+               {"changed_texels", changedTexels(texture, padded)},
+               {"stages", timer.json()},
+               {"output", args.out}});
 }
 
 }  // namespace
@@ -46,16 +71,18 @@ void addDilateCommand(CLI::App& app) {
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   cmd->add_option("texture", args->texture,
-                  "Texture to pad (default: the mesh's base-colour texture)");
-  cmd->add_option("--out,-o", args->out, "Output image")->required();
+                  "Texture to pad (default: the mesh's --texture-slot texture)");
+  cmd->add_option("--out,-o", args->out, "Output image, or .gltf/.glb for a glTF copy")->required();
   auto* radius = cmd->add_option("--radius", args->options.radius, "Rings of gutter texels to fill")
                      ->default_val(4)
                      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--infinite", args->options.infinite, "Fill every gutter texel of the image")
       ->excludes(radius);
+  cmd->add_option("--texture-slot", args->slot, "Texture of the mesh to use and replace")
+      ->default_val("baseColor");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input texture's"));
-  cmd->add_flag("--quiet,-q", args->quiet, "No summary line");
   addWeldToleranceOption(cmd, args->weldTolerance);
+  addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runDilate(*args); }); });
 }
 

@@ -52,8 +52,8 @@ void runFilter(FilterArgs args) {
   }
   const FilterResult result = filterTexture(domain, texture, args.options);
   timer.lap("solve");
-  const PixelFormat stored =
-      writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth);
+  const PixelFormat stored = writeTextureOutput(args.out, domain.mesh(), result.image, args.slot,
+                                                args.bitDepth, args.report.quiet);
   timer.lap("write");
   printWritten(args.report.quiet, args.out, result.image, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();

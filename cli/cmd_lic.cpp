@@ -53,8 +53,8 @@ void runLic(LicArgs args) {
   const LicResult result = lineIntegralConvolution(domain, fieldTexel, args.options, progress);
   timer.lap("solve");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
-  const PixelFormat stored =
-      writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth);
+  const PixelFormat stored = writeTextureOutput(args.out, domain.mesh(), padded, "baseColor",
+                                                args.bitDepth, args.report.quiet);
   timer.lap("write");
   printWritten(args.report.quiet, args.out, padded, stored, domain.unknowns(), timer.total());
   const bool sharpened = args.options.sharpenBeta != 1.0;

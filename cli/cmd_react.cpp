@@ -57,8 +57,8 @@ void runReact(ReactArgs args) {
   const ReactionResult result = reactionDiffusion(domain, args.options, args.steps, progress);
   timer.lap("steps");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
-  const PixelFormat stored =
-      writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth);
+  const PixelFormat stored = writeTextureOutput(args.out, domain.mesh(), padded, "baseColor",
+                                                args.bitDepth, args.report.quiet);
   timer.lap("write");
   printWritten(args.report.quiet, args.out, padded, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();

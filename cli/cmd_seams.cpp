@@ -32,8 +32,8 @@ void runSeams(const SeamsArgs& args) {
     std::cerr << "texgrad: note: " << result.unanchoredTexels
               << " texels kept as they are: no fixed texel ties them to the rest (charts too "
                  "thin for an interior texel at this resolution, or a mask over whole charts)\n";
-  const PixelFormat stored =
-      writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth);
+  const PixelFormat stored = writeTextureOutput(args.out, domain.mesh(), result.image, args.slot,
+                                                args.bitDepth, args.report.quiet);
   timer.lap("write");
   printWritten(args.report.quiet, args.out, result.image, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();

@@ -85,8 +85,8 @@ void runStitch(StitchArgs args) {
                                   ? stitchComposite(domain, composite, segments, args.options)
                                   : stitchPartials(domain, partials, confidences, args.options);
   timer.lap("solve");
-  const PixelFormat stored =
-      writeTextureOutput(args.out, domain.mesh(), result.image, "baseColor", args.bitDepth);
+  const PixelFormat stored = writeTextureOutput(args.out, domain.mesh(), result.image, "baseColor",
+                                                args.bitDepth, args.report.quiet);
   timer.lap("write");
   printWritten(args.report.quiet, args.out, result.image, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();

@@ -2,15 +2,15 @@
 // embedded in the asset. tinygltf parses the source without decoding any image (bytes are only
 // captured) and serialises the edited model to a stream inside writeAtomically.
 //
-// Layout of the output:
-//  * .glb  - self-contained: all buffers are merged into buffer 0 (the BIN chunk) and every image
-//            is stored in a bufferView. Source images that cannot be embedded (content that is
-//            not PNG/JPEG/WebP/KTX2/DDS) stay referenced by a URI relative to the target's
-//            folder. A source image file that is missing is an error (never a dangling URI).
-//  * .gltf - single file: every buffer is embedded as a base64 data URI (no sidecar .bin, so the
-//            one atomic rename publishes the whole asset). Embedded source images and the new
-//            texture live in bufferViews of buffer 0; external source images are referenced by
-//            their path relative to the target's folder, so they keep resolving.
+// The output is one self-contained file that can be moved anywhere:
+//  * .glb  - all buffers are merged into buffer 0 (the BIN chunk) and every image is stored in a
+//            bufferView.
+//  * .gltf - every buffer is embedded as a base64 data URI (no sidecar .bin, so the one atomic
+//            rename publishes the whole asset), and every image, the new texture and the source's
+//            external image files alike, lives in a bufferView of buffer 0.
+// A source image file that is missing cannot be embedded: the copy leaves that image out with
+// the textures and material references that use it (gltf::dropImages), so it never carries a
+// dangling URI, and the caller gets one warning line naming the file.
 //
 // The replaced texture: the first material (in the reader's order: primitives of the drawn scene,
 // then the material list) with a texture in the slot names texture T. Every material slot of that
@@ -37,10 +37,11 @@
 #include <string_view>
 #include <vector>
 
+#include "gltf_common.h"
+#include "gltf_drop_images.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/atomic_file.h"
 #include "texgrad/io/mesh_reader.h"
-#include "gltf_common.h"
 
 namespace texgrad {
 namespace {
@@ -72,25 +73,6 @@ std::string lowercase(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return text;
-}
-
-/// Escapes a relative path for use as a URI reference (RFC 3986: unreserved characters, '/' and
-/// the sub-delimiters stay; ':' is escaped so a first segment never reads as a scheme).
-std::string percentEncode(const std::string& path) {
-  static constexpr std::string_view kKeep = "-._~/!$&'()*+,;=@";
-  static constexpr char kHex[] = "0123456789ABCDEF";
-  std::string out;
-  for (const char ch : path) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (std::isalnum(c) != 0 || kKeep.find(ch) != std::string_view::npos) {
-      out.push_back(ch);
-    } else {
-      out.push_back('%');
-      out.push_back(kHex[c >> 4]);
-      out.push_back(kHex[c & 0xFu]);
-    }
-  }
-  return out;
 }
 
 bool startsWith(const Bytes& bytes, std::string_view magic) {
@@ -352,12 +334,50 @@ void checkImage(const Image& image, const std::string& where) {
                             " x " + std::to_string(image.channels));
 }
 
-/// URI of `file` relative to `folder` (absolute path if no relative one exists).
-std::string relativeUri(const fs::path& file, const fs::path& folder) {
-  std::error_code ec;
-  fs::path relative = fs::relative(file, folder, ec);
-  if (ec || relative.empty()) relative = file;
-  return percentEncode(relative.generic_string());
+/// The file an external image's URI names, relative to the source asset's folder.
+fs::path imageFile(const tinygltf::Image& image, const fs::path& source) {
+  return (fs::absolute(source).parent_path() / percentDecode(image.uri)).lexically_normal();
+}
+
+/// Stores every image not yet in a bufferView (external files, data URIs) in buffer 0, so the
+/// output refers to no file; returns the indices of the external images whose file is missing
+/// (left as they are, for dropImages). Throws if an image's bytes are not a format glTF carries.
+std::vector<int> embedSourceImages(tinygltf::Model& model, const ImageBytes& sourceImages,
+                                   const fs::path& source) {
+  std::vector<int> missing;
+  for (size_t i = 0; i < model.images.size(); ++i) {
+    tinygltf::Image& img = model.images[i];
+    if (img.bufferView >= 0) continue;
+    const std::string name = source.string() + ": image " + std::to_string(i) +
+                             (img.uri.empty() ? "" : " (URI '" + img.uri + "')");
+    const auto captured = sourceImages.find(static_cast<int>(i));
+    if (captured == sourceImages.end()) {
+      if (img.uri.empty())
+        throw InvalidInputError(name + " has neither a URI nor data; re-export the asset");
+      if (fs::exists(imageFile(img, source)))
+        throw IoError(name + " could not be read from " + imageFile(img, source).string());
+      missing.push_back(static_cast<int>(i));
+      continue;
+    }
+    const std::string mime = img.mimeType.empty() ? mimeTypeOf(captured->second) : img.mimeType;
+    if (mime.empty())
+      throw UnsupportedError(name +
+                             " is not a PNG, JPEG, WebP, KTX2 or DDS image, so it cannot "
+                             "be embedded in the output; convert it to PNG");
+    img.mimeType = mime;
+    img.bufferView = appendBufferView(model, captured->second);
+    img.uri.clear();
+  }
+  return missing;
+}
+
+/// The warning for a missing source image that the copy leaves out.
+std::string missingImageWarning(const tinygltf::Model& model, int image, const fs::path& source,
+                                const fs::path& target) {
+  const tinygltf::Image& img = model.images[static_cast<size_t>(image)];
+  return source.string() + ": image " + std::to_string(image) + " (URI '" + img.uri +
+         "') was not found at " + imageFile(img, source).string() + "; " + target.string() +
+         " leaves it out, with the textures and material slots that used it";
 }
 
 /// Serialises the model to `path`; tinygltf's image writer is disabled so image URIs stay as set.
@@ -375,8 +395,9 @@ void writeModel(const tinygltf::Model& model, const fs::path& path, const fs::pa
 
 }  // namespace
 
-void writeGltfWithTexture(const fs::path& source, const fs::path& target, const std::string& slot,
-                          const Image& image, std::optional<PixelFormat> format) {
+std::vector<std::string> writeGltfWithTexture(const fs::path& source, const fs::path& target,
+                                              const std::string& slot, const Image& image,
+                                              std::optional<PixelFormat> format) {
   if (std::find(kSlots.begin(), kSlots.end(), slot) == kSlots.end())
     throw InvalidInputError("unknown texture slot '" + slot +
                             "'; use baseColor, normal, emissive, metallicRoughness or occlusion");
@@ -436,36 +457,10 @@ void writeGltfWithTexture(const fs::path& source, const fs::path& target, const 
   }
   redirected.source = newImage;
 
-  // The other images: embed (GLB, data URIs) or re-point external files relative to the target.
-  const fs::path sourceFolder = fs::absolute(source).parent_path();
-  const fs::path targetFolder = fs::absolute(target).parent_path();
-  for (size_t i = 0; i < model.images.size(); ++i) {
-    tinygltf::Image& img = model.images[i];
-    if (img.bufferView >= 0) continue;
-    const auto captured = sourceImages.find(static_cast<int>(i));
-    const bool external = !img.uri.empty();
-    if (captured != sourceImages.end() && (binary || !external)) {
-      const std::string mime = img.mimeType.empty() ? mimeTypeOf(captured->second) : img.mimeType;
-      if (!mime.empty()) {
-        img.mimeType = mime;
-        img.bufferView = appendBufferView(model, captured->second);
-        img.uri.clear();
-        continue;
-      }
-    }
-    if (external) {
-      const fs::path file = (sourceFolder / percentDecode(img.uri)).lexically_normal();
-      if (!fs::exists(file))
-        throw IoError(source.string() + ": image " + std::to_string(i) + " (URI '" + img.uri +
-                      "') was not found at " + file.string() +
-                      ", so the output would refer to a missing file; restore the image file "
-                      "or fix the URI");
-      img.uri = relativeUri(file, targetFolder);
-    } else {
-      throw InvalidInputError(source.string() + ": image " + std::to_string(i) +
-                              " has neither a URI nor data; re-export the asset");
-    }
-  }
+  const std::vector<int> missing = embedSourceImages(model, sourceImages, source);
+  std::vector<std::string> warnings;
+  for (int i : missing) warnings.push_back(missingImageWarning(model, i, source, target));
+  gltf::dropImages(model, missing);
 
   if (binary && model.buffers[0].data.size() > kMaxGlbBytes)
     throw UnsupportedError(where + "the binary data exceeds the 4 GB a GLB can hold; write .gltf");
@@ -473,6 +468,7 @@ void writeGltfWithTexture(const fs::path& source, const fs::path& target, const 
 
   writeAtomically(target,
                   [&](const fs::path& temporary) { writeModel(model, temporary, target, binary); });
+  return warnings;
 }
 
 }  // namespace texgrad

@@ -89,15 +89,17 @@ void checkMeshTextureOutput(const std::filesystem::path& out,
   checkWritableTarget(out);
 }
 
-PixelFormat writeMeshTexture(const std::filesystem::path& out, const TexturedMesh& mesh,
-                             const Image& image, const std::string& slot,
-                             std::optional<PixelFormat> format) {
-  if (!isGltfPath(out)) return writeImage(out, image, format);
+WrittenTexture writeMeshTexture(const std::filesystem::path& out, const TexturedMesh& mesh,
+                                const Image& image, const std::string& slot,
+                                std::optional<PixelFormat> format) {
+  if (!isGltfPath(out)) return {writeImage(out, image, format), {}};
   requireGltfSource(out, mesh.sourcePath);
-  writeGltfWithTexture(mesh.sourcePath, out, slot, image, format);
+  WrittenTexture written;
+  written.warnings = writeGltfWithTexture(mesh.sourcePath, out, slot, image, format);
   // The embedded PNG's depth (writeGltfWithTexture).
-  return format.value_or(image.format) == PixelFormat::UInt8 ? PixelFormat::UInt8
-                                                             : PixelFormat::UInt16;
+  written.stored = format.value_or(image.format) == PixelFormat::UInt8 ? PixelFormat::UInt8
+                                                                       : PixelFormat::UInt16;
+  return written;
 }
 
 }  // namespace texgrad

@@ -2,6 +2,9 @@
 // is refused with a typed exception whose message names the file and the line or element.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "silent_read_fixtures.h"
@@ -97,17 +100,64 @@ TEST(SilentReads, MissingGltfImageNamesAssetIndexAndUri) {
   EXPECT_TRUE(readMeshTexture(mesh, "normal").has_value());  // only the slot processed matters
 }
 
-TEST(SilentReads, GltfWriteBackNeverLeavesADanglingUri) {
+/// The text of a written file.
+std::string fileText(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+TEST(SilentReads, GltfWriteBackLeavesAMissingImageOutWithAWarning) {
+  // The normal map's file is missing; processing baseColor writes a copy whose normal slot has no
+  // texture (never a dangling URI) and returns one warning naming the image.
   const fs::path dir = test::tempDir("silent_gltf_write");
   const fs::path gltf = fx::write(dir, "m.gltf", fx::triangleGltf("color.png", "gone.png"));
   writePng(dir / "color.png");
   const TexturedMesh mesh = readMesh(gltf);
   const Image image = *readMeshTexture(mesh, "baseColor");
   for (const char* name : {"out.gltf", "out.glb"}) {
-    expectNames(thrown<IoError>([&] { writeMeshTexture(dir / name, mesh, image); }),
-                {"m.gltf", "image 1", "URI 'gone.png'"});
-    EXPECT_FALSE(fs::exists(dir / name));
+    SCOPED_TRACE(name);
+    const WrittenTexture written = writeMeshTexture(dir / name, mesh, image);
+    ASSERT_EQ(written.warnings.size(), 1u);
+    expectNames(written.warnings[0], {"m.gltf", "image 1", "URI 'gone.png'", name});
+    EXPECT_EQ(fileText(dir / name).find("gone.png"), std::string::npos);
+    const TexturedMesh copy = readMesh(dir / name);
+    EXPECT_EQ(copy.texture("normal"), nullptr);
+    ASSERT_NE(copy.texture("baseColor"), nullptr);
+    EXPECT_FALSE(copy.texture("baseColor")->embedded.empty());
   }
+}
+
+TEST(SilentReads, GltfWriteBackRenumbersWhatFollowsAMissingImage) {
+  // Images color (0), gone (1, missing), sheen (2); a clearcoat extension refers to textures 1
+  // and 2. The copy keeps images/textures 0 and 2 (now 1), drops the extension's reference to
+  // the missing one and renumbers the other.
+  const fs::path dir = test::tempDir("silent_gltf_renumber");
+  std::string asset = fx::triangleGltf("color.png", "gone.png");
+  const auto replace = [&](const std::string& from, const std::string& to) {
+    asset.replace(asset.find(from), from.size(), to);
+  };
+  replace(R"("normalTexture":{"index":1})",
+          R"("normalTexture":{"index":1},"extensions":{"KHR_materials_clearcoat":)"
+          R"({"clearcoatTexture":{"index":1},"clearcoatRoughnessTexture":{"index":2}}})");
+  replace(R"({"source":1}])", R"({"source":1},{"source":2}])");
+  replace(R"({"uri":"gone.png"}])", R"({"uri":"gone.png"},{"uri":"sheen.png"}])");
+  replace(R"("scene":0,)", R"("scene":0,"extensionsUsed":["KHR_materials_clearcoat"],)");
+  const fs::path gltf = fx::write(dir, "m.gltf", asset);
+  writePng(dir / "color.png");
+  writePng(dir / "sheen.png");
+  const TexturedMesh mesh = readMesh(gltf);
+  ASSERT_EQ(writeMeshTexture(dir / "out.gltf", mesh, *readMeshTexture(mesh)).warnings.size(), 1u);
+  const std::string text = fileText(dir / "out.gltf");
+  EXPECT_EQ(text.find("gone.png"), std::string::npos);
+  const nlohmann::json out = nlohmann::json::parse(text);
+  EXPECT_EQ(out["images"].size(), 2u);
+  ASSERT_EQ(out["textures"].size(), 2u);
+  EXPECT_EQ(out["textures"][1]["source"], 1);
+  const nlohmann::json& material = out["materials"][0];
+  EXPECT_FALSE(material.contains("normalTexture")) << material;
+  const nlohmann::json& clearcoat = material["extensions"]["KHR_materials_clearcoat"];
+  EXPECT_FALSE(clearcoat.contains("clearcoatTexture")) << material;
+  EXPECT_EQ(clearcoat["clearcoatRoughnessTexture"]["index"], 1) << material;
 }
 
 }  // namespace texgrad::silent_reads_test

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "texgrad/io/image.h"
 #include "texgrad/io/textured_mesh.h"
@@ -22,13 +23,20 @@ std::optional<Image> readMeshTexture(const TexturedMesh& mesh,
 /// True if `path` names a glTF asset (extension .gltf or .glb, in any case).
 bool isGltfPath(const std::filesystem::path& path);
 
+/// What writeMeshTexture wrote.
+struct WrittenTexture {
+  PixelFormat stored = PixelFormat::UInt8;  ///< the pixel format stored
+  std::vector<std::string> warnings;        ///< one line per source image a glTF copy left out
+};
+
 /// Writes a processed texture of `mesh` to `out`: an image file (writeImage), or, when `out` is
 /// a glTF path, a copy of the mesh's source asset whose `slot` texture is `image`
-/// (writeGltfWithTexture). `format` defaults to image.format. Throws InvalidInputError if a glTF
-/// output is asked for a mesh that was not read from glTF. Returns the pixel format stored.
-PixelFormat writeMeshTexture(const std::filesystem::path& out, const TexturedMesh& mesh,
-                             const Image& image, const std::string& slot = "baseColor",
-                             std::optional<PixelFormat> format = std::nullopt);
+/// (writeGltfWithTexture: self-contained; a missing source image is left out with a warning).
+/// `format` defaults to image.format. Throws InvalidInputError if a glTF output is asked for a
+/// mesh that was not read from glTF.
+WrittenTexture writeMeshTexture(const std::filesystem::path& out, const TexturedMesh& mesh,
+                                const Image& image, const std::string& slot = "baseColor",
+                                std::optional<PixelFormat> format = std::nullopt);
 
 /// Checks before any work that writeMeshTexture can write `out` for a mesh read from
 /// `meshSource` (empty for a procedural mesh): checkImageOutput for an image; for a glTF output,
