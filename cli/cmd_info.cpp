@@ -93,7 +93,8 @@ bool printTextures(const TexturedMesh& mesh) {
   for (const TextureRef& t : mesh.textures)
     std::cout << "  " << t.slot
               << " texture: " << (t.path.empty() ? std::string("embedded") : t.path.string())
-              << (t.origin.empty() ? "" : ", named by " + t.origin) << "\n";
+              << (t.origin.empty() ? "" : ", named by " + t.origin) << ", on " << t.faces
+              << (t.faces == 1 ? " face\n" : " faces\n");
   bool missingImage = false;
   for (const TextureRef& t : mesh.textures)
     if (!t.path.empty() && !std::filesystem::exists(t.path)) {

@@ -14,6 +14,8 @@ cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh --viewer
 echo "== viewer page (npm ci in viewer/)"
 bash scripts/build-viewer.sh
+echo "== glTF validator (npm ci in tests/gltf-validator/, for CTest GltfOutputsValidate)"
+(cd tests/gltf-validator && npm ci --no-audit --no-fund --loglevel=error)
 jobs="$(nproc)"
 
 echo "== sanitizer build (ASan + UBSan)"
@@ -27,7 +29,7 @@ ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 
 echo "== release build"
 bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_VIEWER_PAGE=ON \
-  -DTEXGRAD_E2E_TESTS=ON
+  -DTEXGRAD_E2E_TESTS=ON -DTEXGRAD_GLTF_VALIDATOR_TESTS=ON
 echo "== consumers (install, find_package, pkg-config, add_subdirectory)"
 bash scripts/test-consumers.sh build/release
 # Fuzz every reader a user's file reaches (clang-14 libFuzzer, ASan + UBSan) for 45 s a target,
@@ -41,4 +43,4 @@ ctest --test-dir build/release -j"$jobs" --output-on-failure --no-label-summary 
 # them again here would add about two minutes to CI. HeapReuse's glibc-malloc tests are compiled
 # only without the sanitizers (which replace malloc), so they run here.
 ctest --test-dir build/release -j"$jobs" --output-on-failure --no-label-summary \
-  -R 'Slow|HeapReuse|ViewerPageUnits|ViewerE2E'
+  -R 'Slow|HeapReuse|ViewerPageUnits|ViewerE2E|GltfOutputsValidate'

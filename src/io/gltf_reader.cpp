@@ -209,6 +209,12 @@ void appendPrimitive(TexturedMesh& mesh, const tinygltf::Model& model,
   }
 }
 
+/// A material a primitive uses and the faces (triangles) the primitive added.
+struct MaterialUse {
+  int material = -1;
+  size_t faces = 0;
+};
+
 class SceneCollector {
  public:
   SceneCollector(const tinygltf::Model& model, std::string file)
@@ -235,26 +241,30 @@ class SceneCollector {
     for (size_t p = 0; p < m.primitives.size(); ++p) {
       const std::string where = file_ + ": mesh " + std::to_string(index) + " ('" + m.name +
                                 "') primitive " + std::to_string(p);
+      const size_t before = mesh_.faceCount();
       appendPrimitive(mesh_, model_, m.primitives[p], world, where);
-      if (m.primitives[p].material >= 0) materials_.push_back(m.primitives[p].material);
+      if (m.primitives[p].material >= 0)
+        materials_.push_back({m.primitives[p].material, mesh_.faceCount() - before});
     }
   }
 
   TexturedMesh& mesh() { return mesh_; }
-  const std::vector<int>& materials() const { return materials_; }
+  const std::vector<MaterialUse>& materials() const { return materials_; }
 
  private:
   const tinygltf::Model& model_;
   std::string file_;
   std::vector<bool> onPath_;
   TexturedMesh mesh_;
-  std::vector<int> materials_;  ///< in primitive order
+  std::vector<MaterialUse> materials_;  ///< in primitive order
 };
 
 /// Adds the image of texture `textureIndex` to `slot` unless the slot already holds that image
 /// (several different images mean several texture pages: readMeshTexture refuses them).
+/// `faces` are the faces using it there, added to the slot's count for that image.
 void addTexture(TexturedMesh& mesh, const tinygltf::Model& model, const ImageBytes& embedded,
-                const std::filesystem::path& folder, const char* slot, int textureIndex) {
+                const std::filesystem::path& folder, const char* slot, int textureIndex,
+                size_t faces) {
   if (textureIndex < 0 || static_cast<size_t>(textureIndex) >= model.textures.size()) return;
   const int source = model.textures[static_cast<size_t>(textureIndex)].source;
   if (source < 0 || static_cast<size_t>(source) >= model.images.size()) return;
@@ -271,8 +281,12 @@ void addTexture(TexturedMesh& mesh, const tinygltf::Model& model, const ImageByt
     ref.embedded = it->second;
     ref.mimeType = image.mimeType;
   }
-  for (const TextureRef& t : mesh.textures)
-    if (t.slot == ref.slot && t.path == ref.path && t.embedded == ref.embedded) return;
+  ref.faces = faces;
+  for (TextureRef& t : mesh.textures)
+    if (t.slot == ref.slot && t.path == ref.path && t.embedded == ref.embedded) {
+      t.faces += faces;
+      return;
+    }
   mesh.textures.push_back(std::move(ref));
 }
 
@@ -289,16 +303,16 @@ TexturedMesh readGltf(const std::filesystem::path& path) {
   TexturedMesh mesh = std::move(collector.mesh());
 
   const std::filesystem::path folder = std::filesystem::absolute(path).parent_path();
-  for (int index : collector.materials()) {
-    if (static_cast<size_t>(index) >= model.materials.size()) continue;
-    const tinygltf::Material& m = model.materials[static_cast<size_t>(index)];
+  for (const MaterialUse& use : collector.materials()) {
+    if (static_cast<size_t>(use.material) >= model.materials.size()) continue;
+    const tinygltf::Material& m = model.materials[static_cast<size_t>(use.material)];
     addTexture(mesh, model, embedded, folder, "baseColor",
-               m.pbrMetallicRoughness.baseColorTexture.index);
-    addTexture(mesh, model, embedded, folder, "normal", m.normalTexture.index);
-    addTexture(mesh, model, embedded, folder, "emissive", m.emissiveTexture.index);
+               m.pbrMetallicRoughness.baseColorTexture.index, use.faces);
+    addTexture(mesh, model, embedded, folder, "normal", m.normalTexture.index, use.faces);
+    addTexture(mesh, model, embedded, folder, "emissive", m.emissiveTexture.index, use.faces);
     addTexture(mesh, model, embedded, folder, "metallicRoughness",
-               m.pbrMetallicRoughness.metallicRoughnessTexture.index);
-    addTexture(mesh, model, embedded, folder, "occlusion", m.occlusionTexture.index);
+               m.pbrMetallicRoughness.metallicRoughnessTexture.index, use.faces);
+    addTexture(mesh, model, embedded, folder, "occlusion", m.occlusionTexture.index, use.faces);
   }
   validateMesh(mesh, file);
   mesh.sourcePath = path;

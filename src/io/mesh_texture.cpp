@@ -40,7 +40,9 @@ std::optional<Image> readMeshTexture(const TexturedMesh& mesh, const std::string
   if (refs.empty()) return std::nullopt;
   if (refs.size() > 1) {
     std::string list;
-    for (const TextureRef* ref : refs) list += (list.empty() ? "" : ", ") + describe(*ref);
+    for (const TextureRef* ref : refs)
+      list += (list.empty() ? "" : ", ") + describe(*ref) + " on " + std::to_string(ref->faces) +
+              (ref->faces == 1 ? " face" : " faces");
     throw UnsupportedError(file + ": its faces use " + std::to_string(refs.size()) + " different " +
                            slot + " textures (" + list +
                            "), and only one texture page is supported; give every face one "

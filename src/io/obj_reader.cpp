@@ -47,27 +47,35 @@ bool sameImage(const TextureRef& a, const TextureRef& b) {
 void addTextures(TexturedMesh& mesh, const std::filesystem::path& path,
                  const std::vector<tinyobj::shape_t>& shapes,
                  const std::vector<tinyobj::material_t>& materials) {
-  std::vector<bool> used(materials.size(), false);
+  std::vector<size_t> faces(materials.size(), 0);  // triangles per material (faces are fanned)
   for (const auto& shape : shapes)
-    for (int id : shape.mesh.material_ids)
-      if (id >= 0 && static_cast<size_t>(id) < materials.size())
-        used[static_cast<size_t>(id)] = true;
+    for (size_t f = 0; f < shape.mesh.material_ids.size(); ++f) {
+      const int id = shape.mesh.material_ids[f];
+      const size_t corners =
+          f < shape.mesh.num_face_vertices.size() ? shape.mesh.num_face_vertices[f] : 0;
+      if (id >= 0 && static_cast<size_t>(id) < materials.size() && corners >= 3)
+        faces[static_cast<size_t>(id)] += corners - 2;
+    }
   const auto addSlot = [&](const char* slot, const char* keyword, const std::string& name,
-                           const tinyobj::material_t& m, bool isUsed) {
-    if (name.empty() || (!isUsed && mesh.texture(slot) != nullptr)) return;
+                           const tinyobj::material_t& m, size_t materialFaces) {
+    if (name.empty() || (materialFaces == 0 && mesh.texture(slot) != nullptr)) return;
     TextureRef ref;
     ref.slot = slot;
     ref.path = resolveTexture(path, name);
     ref.origin = "material '" + m.name + "' (" + keyword + " '" + name + "')";
-    for (const TextureRef& t : mesh.textures)
-      if (t.slot == ref.slot && sameImage(t, ref)) return;
+    ref.faces = materialFaces;
+    for (TextureRef& t : mesh.textures)
+      if (t.slot == ref.slot && sameImage(t, ref)) {
+        t.faces += materialFaces;
+        return;
+      }
     mesh.textures.push_back(std::move(ref));
   };
   for (size_t id : materialOrder(shapes, materials.size())) {
     const tinyobj::material_t& m = materials[id];
-    addSlot("baseColor", "map_Kd", m.diffuse_texname, m, used[id]);
-    addSlot("normal", "norm", m.normal_texname, m, used[id]);
-    if (m.normal_texname.empty()) addSlot("normal", "bump", m.bump_texname, m, used[id]);
+    addSlot("baseColor", "map_Kd", m.diffuse_texname, m, faces[id]);
+    addSlot("normal", "norm", m.normal_texname, m, faces[id]);
+    if (m.normal_texname.empty()) addSlot("normal", "bump", m.bump_texname, m, faces[id]);
   }
 }
 

@@ -48,12 +48,13 @@ TEST(CliSilentReads, TwoMaterialsWithTwoTexturesAreRefusedAndListedByInfo) {
   fixtures::write(dir, "two.obj", fixtures::twoMaterialObj());
   writePng(dir / "red.png");
   writePng(dir / "blue.png");
-  expectRefused(
-      {"filter", "two.obj", "--out", "out.png"}, dir, "out.png",
-      {"two.obj", "material 'red' (map_Kd 'red.png')", "material 'blue' (map_Kd 'blue.png')"});
+  expectRefused({"filter", "two.obj", "--out", "out.png"}, dir, "out.png",
+                {"two.obj", "material 'red' (map_Kd 'red.png') on 1 face",
+                 "material 'blue' (map_Kd 'blue.png') on 1 face"});
   const CliResult info = runCli({"info", "two.obj"}, dir);
   EXPECT_EQ(info.status, 0) << info.err;
-  for (const char* part : {"red.png, named by material 'red'", "blue.png, named by material 'blue'",
+  for (const char* part : {"red.png, named by material 'red' (map_Kd 'red.png'), on 1 face",
+                           "blue.png, named by material 'blue' (map_Kd 'blue.png'), on 1 face",
                            "several different baseColor textures"})
     EXPECT_NE(info.out.find(part), std::string::npos)
         << "missing '" << part << "' in: " << info.out;

@@ -60,23 +60,31 @@ TEST(SilentReads, ObjMalformedCornersNameTheLine) {
               {"far.obj line 9", "texture coordinate 7", "has 4"});
 }
 
-TEST(SilentReads, TwoMaterialsWithTwoTexturesAreRefusedByName) {
+/// two.obj: material 'red' on one triangle, 'blue' on a triangle and a quad (3 faces once fanned).
+std::string unevenTwoMaterialObj() {
+  return fx::squareObj("mtllib two.mtl\n", "usemtl red\n", "usemtl blue\nf 1/1 2/2 3/3 4/4\n");
+}
+
+TEST(SilentReads, TwoMaterialsWithTwoTexturesAreRefusedByNameAndFaceCount) {
   const fs::path dir = test::tempDir("silent_two");
   fx::write(dir, "two.mtl", fx::twoMaterialMtl("red.png", "blue.png"));
   writePng(dir / "red.png");
   writePng(dir / "blue.png");
-  const TexturedMesh mesh = readMesh(fx::write(dir, "two.obj", fx::twoMaterialObj()));
-  EXPECT_EQ(mesh.faceCount(), 2u);
-  expectNames(thrown<UnsupportedError>([&] { readMeshTexture(mesh, "baseColor"); }),
-              {"two.obj", "2 different baseColor textures", "material 'red' (map_Kd 'red.png')",
-               "material 'blue' (map_Kd 'blue.png')"});
+  const TexturedMesh mesh = readMesh(fx::write(dir, "two.obj", unevenTwoMaterialObj()));
+  EXPECT_EQ(mesh.faceCount(), 4u);
+  expectNames(
+      thrown<UnsupportedError>([&] { readMeshTexture(mesh, "baseColor"); }),
+      {"two.obj", "2 different baseColor textures", "material 'red' (map_Kd 'red.png') on 1 face,",
+       "material 'blue' (map_Kd 'blue.png') on 3 faces"});
 }
 
 TEST(SilentReads, TwoMaterialsSharingATextureAreRead) {
   const fs::path dir = test::tempDir("silent_shared");
   fx::write(dir, "two.mtl", fx::twoMaterialMtl("same.png", "same.png"));
   writePng(dir / "same.png");
-  const TexturedMesh mesh = readMesh(fx::write(dir, "two.obj", fx::twoMaterialObj()));
+  const TexturedMesh mesh = readMesh(fx::write(dir, "two.obj", unevenTwoMaterialObj()));
+  ASSERT_NE(mesh.texture("baseColor"), nullptr);
+  EXPECT_EQ(mesh.texture("baseColor")->faces, 4u) << "both materials' faces";
   const std::optional<Image> texture = readMeshTexture(mesh, "baseColor");
   ASSERT_TRUE(texture.has_value());
   EXPECT_EQ(texture->width, 4);
@@ -98,6 +106,7 @@ TEST(SilentReads, MissingGltfImageNamesAssetIndexAndUri) {
   expectNames(thrown<IoError>([&] { readMeshTexture(mesh, "baseColor"); }),
               {"m.gltf", "image 0", "URI 'gone.png'"});
   EXPECT_TRUE(readMeshTexture(mesh, "normal").has_value());  // only the slot processed matters
+  EXPECT_EQ(mesh.texture("normal")->faces, 1u);
 }
 
 /// The text of a written file.

@@ -21,6 +21,7 @@ struct TextureRef {
   std::vector<unsigned char> embedded;   ///< encoded image bytes (glTF bufferView / data URI)
   std::string mimeType;                  ///< e.g. "image/png" for embedded images
   std::string origin;  ///< where the file names it, for messages: "material 'red' (map_Kd 'r.png')"
+  size_t faces = 0;    ///< faces (triangles) whose material uses this image in this slot
 };
 
 /// Triangle mesh with per-corner texture coordinates (OBJ-style separate index spaces).
