@@ -13,7 +13,12 @@ int main(int argc, char** argv) {
   texgrad::cli::installInterruptCleanup();  // a killed run leaves no temporary output file
   CLI::App app{
       "texgrad: gradient-domain processing of surface signals inside a texture atlas.\n"
-      "Meshes: .obj (+.mtl), .ply, .gltf, .glb, or builtin:NAME for a procedural mesh."};
+      "Meshes: .obj (+.mtl), .ply, .gltf, .glb, or builtin:NAME for a procedural mesh.\n"
+      "Outputs: an image, or for a mesh read from glTF a .gltf/.glb copy of its asset with the "
+      "processed texture replaced. A copy is one self-contained file that can be moved: every "
+      "image is embedded (.glb: binary chunk; .gltf: base64, a third larger). A source image file "
+      "that is missing is left out of the copy with the material slots that used it, with one "
+      "warning line naming it (none with --quiet); the processed slot's image must exist."};
   app.set_version_flag("--version", "texgrad " TEXGRAD_VERSION);  // project() in CMakeLists.txt
   app.require_subcommand(1);
   app.option_defaults()->always_capture_default(true);  // --help shows every default
