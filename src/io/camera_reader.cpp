@@ -50,9 +50,10 @@ std::vector<Camera> readCameraFile(const std::filesystem::path& path) {
   if (std::filesystem::is_directory(path, ec)) return readColmapFolder(path);
   const std::string file = path.filename().string();
   if (file == "cameras.txt" || file == "images.txt") return readColmapFolder(path.parent_path());
+  if (path.extension() == ".json") return cameras::readCameraJson(path);
   throw UnsupportedError(path.string() +
                          ": unknown camera file; pass a COLMAP text model (its folder, "
-                         "cameras.txt or images.txt)");
+                         "cameras.txt or images.txt) or a .json camera file (docs/photos.md)");
 }
 
 void resolveCameraImages(std::vector<Camera>& cameras, const std::filesystem::path& imagesDir,

@@ -116,10 +116,14 @@ std::string at(const std::filesystem::path& file, size_t line) {
 double number(std::string_view word, const std::string& where, std::string_view field) {
   double value = 0;
   const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), value);
-  const bool parsed = ec == std::errc() && end == word.data() + word.size();
+  const bool whole = end == word.data() + word.size();
+  const bool parsed = ec == std::errc() && whole;
   if (!parsed || !std::isfinite(value))
     throw InvalidInputError(where + std::string(field) + " is '" + std::string(word) + "', " +
-                            (parsed ? "which is not finite" : "which is not a number") +
+                            (parsed ? "which is not finite"
+                             : ec == std::errc::result_out_of_range && whole
+                                 ? "which is out of range"
+                                 : "which is not a number") +
                             "; fix the line or re-export the model");
   return value;
 }
@@ -349,8 +353,7 @@ void writeColmapText(const std::filesystem::path& folder, const std::vector<Came
             << "# Number of images: " << cameras.size() << ", mean observations per image: 0\n";
   for (size_t i = 0; i < cameras.size(); ++i) {
     const Camera& c = cameras[i];
-    cameras::checkWritable(
-        c, folder.string() + ": camera " + std::to_string(i) + " ('" + c.name + "'): ");
+    cameras::checkWritable(c, folder.string() + ": camera " + std::to_string(i) + ": ");
     const size_t id = i + 1;
     camerasTxt << id << " " << cameras::modelLine(c) << "\n";
     const Eigen::Quaterniond q(c.R);
