@@ -39,13 +39,19 @@ std::string formatNumber(double value) {
   return std::string(buffer.data(), ec == std::errc() ? end : buffer.data());
 }
 
+std::string nameProblem(std::string_view name) {
+  if (name.empty()) return "the image name is empty";
+  for (char c : name)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      return "the image name holds a control character (a line break or tab?)";
+  if (name.front() == ' ' || name.back() == ' ')
+    return "the image name starts or ends with a blank";
+  return "";
+}
+
 void checkWritable(const Camera& camera, const std::string& where) {
-  const std::string& name = camera.name;
-  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
-  if (name.empty() || blank(name.front()) || blank(name.back()) ||
-      name.find_first_of("\r\n") != std::string::npos)
-    throw InvalidInputError(where +
-                            "the image name must be one line without leading or trailing blanks");
+  if (const std::string problem = nameProblem(camera.name); !problem.empty())
+    throw InvalidInputError(where + problem);
   if (camera.width <= 0 || camera.height <= 0)
     throw InvalidInputError(where + "the image size must be positive");
   const Distortion& d = camera.distortion;

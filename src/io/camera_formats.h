@@ -31,8 +31,12 @@ bool isRotation(const Eigen::Matrix3d& R);
 /// The shortest decimal text that reads back as exactly `value`.
 std::string formatNumber(double value);
 
+/// What is wrong with an image name, or empty when it is fine: names are non-empty, hold no
+/// control characters (so messages stay one line) and neither start nor end with a blank.
+std::string nameProblem(std::string_view name);
+
 /// Throws InvalidInputError (prefixed by `where`) unless the camera can be written and read back:
-/// a one-line name without surrounding blanks, a positive size and focal lengths, finite
+/// a name without nameProblem, a positive size and focal lengths, finite
 /// numbers, a rotation R.
 void checkWritable(const Camera& camera, const std::string& where);
 

@@ -156,6 +156,7 @@ void readPose(const Json& entry, const Where& where, Camera& camera) {
   } else {
     const Eigen::Vector3d C = matrix<3, 1>(entry["C"], where / "C");
     camera.t = -camera.R * C;
+    if (!camera.t.allFinite()) (where / "C").fail("the centre is too far out to compute t = -R C");
   }
 }
 
@@ -193,10 +194,8 @@ Camera readEntry(const Json& entry, const Where& where) {
   if (!file.is_string())
     (where / "file").fail("expected the photo's file name, found " + describe(file));
   camera.name = file.get<std::string>();
-  const auto blank = [](char c) { return c == ' ' || c == '\t'; };
-  if (camera.name.empty() || blank(camera.name.front()) || blank(camera.name.back()) ||
-      camera.name.find_first_of("\r\n") != std::string::npos)
-    (where / "file").fail("the file name must be one line without leading or trailing blanks");
+  if (const std::string problem = nameProblem(camera.name); !problem.empty())
+    (where / "file").fail(problem);
   readIntrinsics(entry, where, camera);
   readPose(entry, where, camera);
   if (entry.contains("distortion"))

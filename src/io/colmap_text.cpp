@@ -278,6 +278,8 @@ std::vector<Camera> readColmapText(const std::filesystem::path& camerasTxt,
       throw InvalidInputError(where + "image '" + std::string(w[9]) + "' refers to camera " +
                               std::to_string(cameraId) + ", which " + camerasTxt.string() +
                               " does not define; export cameras.txt and images.txt together");
+    if (const std::string problem = nameProblem(w[9]); !problem.empty())
+      throw InvalidInputError(where + problem + "; rename the photo");
     const auto [previous, fresh] = names.emplace(std::string(w[9]), line->number);
     if (!fresh)
       throw InvalidInputError(where + "image '" + std::string(w[9]) +

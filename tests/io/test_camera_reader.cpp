@@ -224,6 +224,8 @@ std::vector<BadColmap> badColmapModels() {
        3, "image id 1 is used twice"},
       {"one_line_per_image", kGoodCamera, "1 1 0 0 0 0 0 0 1 a.jpg\n2 1 0 0 0 0 0 0 1 b.jpg\n",
        "images.txt", 2, "images.txt holds two lines per image"},
+      {"tab_in_name", kGoodCamera, "1 1 0 0 0 0 0 0 1 a\tb.jpg\n\n", "images.txt", 1,
+       "control character"},
       {"short_image", kGoodCamera, "1 1 0 0 0 0 0 0 1\n", "images.txt", 1, "found 9 words"},
       {"nan_translation", kGoodCamera, "1 1 0 0 0 0 nan 0 1 a.jpg\n\n", "images.txt", 1,
        "TY is 'nan', which is not finite"},
