@@ -1,7 +1,7 @@
-// Fuzz target for the camera file readers (readCameraFile): the first byte picks the format (even:
-// texgrad's camera JSON; odd: COLMAP's text model, cameras.txt then images.txt after a line
-// "#--images--"). A file the reader accepts must be written by the matching writer and read back
-// to the same cameras.
+// Fuzz target for the camera file readers (readCameraFile): the first byte picks the format (modulo
+// 3: 0 texgrad's camera JSON; 1 COLMAP's text model, cameras.txt then images.txt after a line
+// "#--images--"; 2 an OpenMVS .mvs scene). A JSON or COLMAP file the reader accepts must be
+// written by the matching writer and read back to the same cameras (.mvs has no writer).
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -39,17 +39,18 @@ void requireSame(const std::vector<Camera>& a, const std::vector<Camera>& b, boo
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace texgrad;
   if (size < 1) return 0;
-  const bool colmap = data[0] % 2 == 1;
+  enum Format { Json, Colmap, OpenMvs };
+  const auto format = static_cast<Format>(data[0] % 3);
   std::string_view text = fuzz::asText(data + 1, size - 1);
   std::filesystem::path path;
-  if (colmap) {
+  if (format == Colmap) {
     const std::string_view separator = "\n#--images--\n";
     const size_t split = text.find(separator);
     fuzz::writeScratch(
         "images.txt", split == std::string_view::npos ? "" : text.substr(split + separator.size()));
     path = fuzz::writeScratch("cameras.txt", text.substr(0, split));
   } else {
-    path = fuzz::writeScratch("fuzz.json", text);
+    path = fuzz::writeScratch(format == Json ? "fuzz.json" : "fuzz.mvs", text);
   }
   std::vector<Camera> cameras;
   try {
@@ -58,10 +59,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return 0;  // a typed refusal with a message is the expected outcome for a malformed file
   }
   // Accepted: the writer must take it and the reader must give it back.
-  if (colmap) {
+  if (format == Colmap) {
     writeColmapText(fuzz::scratch() / "written", cameras);
     requireSame(cameras, readCameraFile(fuzz::scratch() / "written"), true);
-  } else {
+  } else if (format == Json) {
     writeCameraJson(fuzz::scratch() / "written.json", cameras);
     requireSame(cameras, readCameraFile(fuzz::scratch() / "written.json"), false);
   }

@@ -22,6 +22,9 @@ std::vector<Camera> readColmapText(const std::filesystem::path& camerasTxt,
 /// Reads texgrad's camera JSON (docs/photos.md).
 std::vector<Camera> readCameraJson(const std::filesystem::path& path);
 
+/// Reads OpenMVS's interface file (.mvs, archive versions 0 to 7): the calibrated images.
+std::vector<Camera> readOpenMvs(const std::filesystem::path& path);
+
 /// A whole file as bytes; throws IoError naming it when it cannot be read.
 std::string readWholeFile(const std::filesystem::path& path);
 

@@ -51,9 +51,11 @@ std::vector<Camera> readCameraFile(const std::filesystem::path& path) {
   const std::string file = path.filename().string();
   if (file == "cameras.txt" || file == "images.txt") return readColmapFolder(path.parent_path());
   if (path.extension() == ".json") return cameras::readCameraJson(path);
+  if (path.extension() == ".mvs") return cameras::readOpenMvs(path);
   throw UnsupportedError(path.string() +
                          ": unknown camera file; pass a COLMAP text model (its folder, "
-                         "cameras.txt or images.txt) or a .json camera file (docs/photos.md)");
+                         "cameras.txt or images.txt), a .json camera file (docs/photos.md) or an "
+                         "OpenMVS .mvs scene");
 }
 
 void resolveCameraImages(std::vector<Camera>& cameras, const std::filesystem::path& imagesDir,

@@ -1,5 +1,5 @@
-// Camera files of photogrammetry pipelines (COLMAP's text model, texgrad's camera JSON) read into
-// Camera values, with each photo found under an images folder and its size checked.
+// Camera files of photogrammetry pipelines (COLMAP's text model, texgrad's camera JSON, OpenMVS's
+// .mvs) read into Camera values, with each photo found under an images folder and its size checked.
 #pragma once
 
 #include <filesystem>
@@ -12,8 +12,9 @@ namespace texgrad {
 /// Reads a camera file without looking at the photos (Camera::imagePath stays empty).
 ///
 /// `path` is a folder holding COLMAP's text model (cameras.txt + images.txt), either of those two
-/// files (the other is taken from the same folder), or a `.json` file in texgrad's camera JSON
-/// (docs/photos.md). Cameras come in the file's image order. Throws InvalidInputError naming the
+/// files (the other is taken from the same folder), a `.json` file in texgrad's camera JSON, or
+/// an OpenMVS scene `.mvs` (its calibrated images; conventions in docs/photos.md). Cameras come in
+/// the file's image order. Throws InvalidInputError naming the
 /// file and line (or JSON element) of malformed, non-finite or inconsistent entries,
 /// UnsupportedError for camera models texgrad does not apply (naming the model), IoError when a
 /// file cannot be read.
