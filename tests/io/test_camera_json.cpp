@@ -184,6 +184,7 @@ std::vector<BadJson> badJsonFiles() {
        "cameras[0].distortion", "\"k2\" is missing"},
       {"duplicate_file", cameraList(entry() + ", " + entry()), "cameras[1].file",
        "'a.jpg' is listed twice (also cameras[0])"},
+      {"no_cameras_listed", R"({"cameras": []})", "no calibrated photo", ""},
       {"second_entry", cameraList(entry() + ", 3"), "cameras[1]", "expected an object, found 3"},
   };
 }

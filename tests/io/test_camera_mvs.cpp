@@ -243,6 +243,8 @@ TEST(OpenMvs, BadScenesNameTheElement) {
                   "normalised intrinsics"));
   EXPECT_TRUE(has(mvsError("version0", mvsScene(0, {camera}, {pose}, {{"a.jpg", 0, 0, 0}})),
                   "normalised intrinsics"));
+  EXPECT_TRUE(has(mvsError("no_pose", mvsScene(5, {camera}, {pose}, {{"a.jpg", 0, 0, kNoId}})),
+                  "no calibrated photo"));
   std::string newer = mvsScene(5, {camera}, {pose}, {{"a.jpg", 0, 0, 0}});
   newer[4] = 8;  // the version field
   EXPECT_TRUE(has(mvsError("newer", newer), "archive version 8 is newer"));

@@ -324,6 +324,18 @@ TEST(CameraImages, UnreadablePhotoIsRefused) {
   EXPECT_THROW(readCameras(dir, dir), InvalidInputError);
 }
 
+TEST(CameraFiles, FileWithoutCamerasIsRefused) {
+  const std::filesystem::path dir = colmapModel("no_images", kGoodCamera, "# no images\n");
+  try {
+    readCameraFile(dir / "images.txt");
+    ADD_FAILURE() << "no exception";
+  } catch (const InvalidInputError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind((dir / "images.txt").string() + ": no calibrated photo", 0), 0u)
+        << message;
+  }
+}
+
 TEST(CameraFiles, UnknownKindIsRefused) {
   const std::filesystem::path dir = tempDir("cameras_unknown_kind");
   writeTextFile(dir / "cams.xml", "<cameras/>");
