@@ -203,6 +203,48 @@ def protocol_seeds(out):
         write(out, "protocol", "message_%d.json" % i, m)
 
 
+def camera_seeds(out):
+    # First byte modulo 3: 0 camera JSON, 1 COLMAP text (cameras.txt, "#--images--", images.txt),
+    # 2 OpenMVS .mvs.
+    write(out, "cameras", "colmap.txt", b"\1" + (
+        "# Camera list\n1 SIMPLE_PINHOLE 640 480 500 320 240\n2 PINHOLE 800 600 700 710 400 300\n"
+        "3 SIMPLE_RADIAL 640 480 510 321 239 -0.05\n4 RADIAL 640 480 520 322 238 -0.1 0.02\n"
+        "5 OPENCV 1024 768 900 905 512 384 -0.2 0.05 0.001 -0.002\n"
+        "\n#--images--\n"
+        "# Image list\n1 1 0 0 0 0 0 0 1 a.jpg\n\n"
+        "2 0.7071067811865476 0 0.7071067811865476 0 1 2 3 2 sub/b c.jpg\n10.5 20.5 -1 30 40 7\n"
+        "3 0.5 0.5 0.5 0.5 0 0 5 3 c.png\n\n4 1 0 0 0 0 0 0 4 d.jpg\n\n"
+        "5 1 0 0 0 0 0 0 5 e.jpg\n").encode())
+    write(out, "cameras", "cameras.json", b"\0" + (
+        '{"cameras": [{"file": "IMG_0001.jpg", "width": 640, "height": 480,'
+        ' "K": [[500, 0, 320], [0, 500, 240], [0, 0, 1]],'
+        ' "R": [[0, 0, 1], [0, 1, 0], [-1, 0, 0]], "C": [5, 0, 0],'
+        ' "distortion": {"model": "opencv", "k1": -0.1, "k2": 0.01, "p1": 0.001, "p2": -0.002}},'
+        ' {"file": "b.jpg", "width": 64, "height": 48, "K": [[50, 0, 32], [0, 51, 24], [0, 0, 1]],'
+        ' "R": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "t": [0, 0, 5],'
+        ' "distortion": {"model": "radial", "k1": 0.1, "k2": -0.01}}]}').encode())
+    write(out, "cameras", "scene.mvs", b"\2" + openmvs_scene())
+
+
+def openmvs_scene():
+    """A version-5 OpenMVS archive: one platform, one camera, one pose, two images (one
+    uncalibrated), an empty point cloud (libs/MVS/Interface.h layout, little-endian)."""
+    def string(s):
+        return struct.pack("<Q", len(s)) + s.encode()
+    identity = struct.pack("<9d", 1, 0, 0, 0, 1, 0, 0, 0, 1)
+    data = b"MVSI" + struct.pack("<II", 5, 0)
+    data += struct.pack("<Q", 1) + string("platform000")
+    data += struct.pack("<Q", 1) + string("PINHOLE") + string("RGB") + struct.pack("<II", 640, 480)
+    data += struct.pack("<9d", 500, 0, 319.5, 0, 500, 239.5, 0, 0, 1) + identity
+    data += struct.pack("<3d", 0, 0, 0)
+    data += struct.pack("<Q", 1) + struct.pack("<9d", 0, 0, 1, 0, 1, 0, -1, 0, 0)
+    data += struct.pack("<3d", 5, 0, 0)
+    data += struct.pack("<Q", 2)
+    data += string("a.jpg") + string("") + struct.pack("<IIII", 0, 0, 0, 0)
+    data += string("b.jpg") + string("") + struct.pack("<IIII", 0, 0, 0xFFFFFFFF, 1)
+    return data + struct.pack("<3Q", 0, 0, 0)
+
+
 def main():
     shared, out = sys.argv[1], sys.argv[2]
     obj_seeds(shared, out)
@@ -211,6 +253,7 @@ def main():
     image_seeds(shared, out)
     vector_field_seeds(out)
     protocol_seeds(out)
+    camera_seeds(out)
 
 
 if __name__ == "__main__":
