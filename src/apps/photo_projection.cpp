@@ -15,6 +15,7 @@
 #include "depth_buffer.h"
 #include "texgrad/apps/surface_normals.h"
 #include "texgrad/core/error.h"
+#include "texgrad/io/image_io.h"
 #include "texgrad/io/image_sampling.h"
 
 namespace texgrad {
@@ -191,6 +192,15 @@ PhotoProjection PhotoProjector::project(const Camera& camera, const Image& photo
   out.seenTexels =
       std::count_if(confidence.begin(), confidence.end(), [](float c) { return c > 0.0f; });
   return out;
+}
+
+PhotoProjection projectPhotoFile(const PhotoProjector& projector, const Camera& camera,
+                                 const std::filesystem::path& masksDir) {
+  const Image photo = readImage(camera.imagePath);
+  std::optional<Image> mask;
+  if (!masksDir.empty() && std::filesystem::exists(masksDir / camera.name))
+    mask = readImage(masksDir / camera.name);
+  return projector.project(camera, photo, mask ? &*mask : nullptr);
 }
 
 void BestViewComposite::add(const PhotoProjection& view, int viewIndex) {

@@ -2,6 +2,7 @@
 // partial texture and a confidence map, the pair stitchPartials takes (stitch.h).
 #pragma once
 
+#include <filesystem>
 #include <memory>
 
 #include "texgrad/apps/texel_domain.h"
@@ -69,6 +70,11 @@ class PhotoProjector {
   Eigen::MatrixX3d normals_;
   double diagonal_ = 0.0;
 };
+
+/// Reads `camera`'s photo (camera.imagePath) and, when `masksDir` is not empty and holds a file
+/// named like the photo (camera.name), that mask, then projects the photo: one photo in memory.
+PhotoProjection projectPhotoFile(const PhotoProjector& projector, const Camera& camera,
+                                 const std::filesystem::path& masksDir);
 
 /// Per texel, the view with the highest confidence so far (`texgrad texture --select best`):
 /// fed one projection at a time, it holds the composite texture and its segment image (channel
