@@ -9,6 +9,7 @@
 #include <iterator>
 
 #include "texgrad/core/error.h"
+#include "texgrad/io/atomic_file.h"
 
 namespace texgrad::cameras {
 
@@ -24,6 +25,15 @@ std::string readWholeFile(const std::filesystem::path& path) {
   std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   if (in.bad()) throw IoError("cannot read " + path.string() + "; check the disk");
   return text;
+}
+
+void writeTextFile(const std::filesystem::path& path, const std::string& text) {
+  writeAtomically(path, [&](const std::filesystem::path& temporary) {
+    std::ofstream out(temporary, std::ios::binary);
+    out << text;
+    out.close();
+    if (!out) throw IoError("cannot write " + path.string() + "; check the disk and permissions");
+  });
 }
 
 bool isRotation(const Eigen::Matrix3d& R) {

@@ -28,6 +28,9 @@ std::vector<Camera> readOpenMvs(const std::filesystem::path& path);
 /// A whole file as bytes; throws IoError naming it when it cannot be read.
 std::string readWholeFile(const std::filesystem::path& path);
 
+/// Writes `text` to `path` atomically (writeAtomically); throws IoError naming it on failure.
+void writeTextFile(const std::filesystem::path& path, const std::string& text);
+
 /// True if R is a rotation to kRotationTolerance (orthonormal, determinant +1).
 bool isRotation(const Eigen::Matrix3d& R);
 

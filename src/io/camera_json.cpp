@@ -4,7 +4,6 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <set>
@@ -13,7 +12,6 @@
 #include "camera_formats.h"
 #include "texgrad/core/error.h"
 #include "texgrad/core/json_depth.h"
-#include "texgrad/io/atomic_file.h"
 #include "texgrad/io/camera_writer.h"
 
 namespace texgrad::cameras {
@@ -297,12 +295,7 @@ void writeCameraJson(const std::filesystem::path& path, const std::vector<Camera
     text += (i == 0 ? "\n" : ",\n") + cameras::entryText(cameras[i], where);
   }
   text += "\n  ]\n}\n";
-  writeAtomically(path, [&](const std::filesystem::path& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    out << text;
-    out.close();
-    if (!out) throw IoError("cannot write " + path.string() + "; check the disk and permissions");
-  });
+  cameras::writeTextFile(path, text);
 }
 
 }  // namespace texgrad

@@ -41,9 +41,8 @@ std::pair<int, int> imageSize(const std::filesystem::path& path, const std::stri
   return size;
 }
 
-}  // namespace
-
-std::vector<Camera> readCameraFile(const std::filesystem::path& path) {
+/// The cameras of `path` by its kind, possibly none.
+std::vector<Camera> readByKind(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
     throw IoError("cannot open " + path.string() + ": no such file or folder; check the path");
@@ -56,6 +55,17 @@ std::vector<Camera> readCameraFile(const std::filesystem::path& path) {
                          ": unknown camera file; pass a COLMAP text model (its folder, "
                          "cameras.txt or images.txt), a .json camera file (docs/photos.md) or an "
                          "OpenMVS .mvs scene");
+}
+
+}  // namespace
+
+std::vector<Camera> readCameraFile(const std::filesystem::path& path) {
+  std::vector<Camera> cameras = readByKind(path);
+  if (cameras.empty())
+    throw InvalidInputError(path.string() +
+                            ": no calibrated photo (the file lists no image with a pose); pass "
+                            "the camera file of a finished reconstruction");
+  return cameras;
 }
 
 void resolveCameraImages(std::vector<Camera>& cameras, const std::filesystem::path& imagesDir,

@@ -7,7 +7,6 @@
 #include <Eigen/Geometry>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <optional>
@@ -16,7 +15,6 @@
 
 #include "camera_formats.h"
 #include "texgrad/core/error.h"
-#include "texgrad/io/atomic_file.h"
 #include "texgrad/io/camera_writer.h"
 
 namespace texgrad::cameras {
@@ -329,15 +327,6 @@ std::string modelLine(const Camera& c) {
   return line;
 }
 
-void writeText(const std::filesystem::path& path, const std::string& text) {
-  writeAtomically(path, [&](const std::filesystem::path& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    out << text;
-    out.close();
-    if (!out) throw IoError("cannot write " + path.string() + "; check the disk and permissions");
-  });
-}
-
 }  // namespace
 
 }  // namespace texgrad::cameras
@@ -367,12 +356,13 @@ void writeColmapText(const std::filesystem::path& folder, const std::vector<Came
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
   if (ec) throw IoError("cannot create " + folder.string() + ": " + ec.message());
-  cameras::writeText(folder / "cameras.txt", camerasTxt.str());
-  cameras::writeText(folder / "images.txt", imagesTxt.str());
-  cameras::writeText(folder / "points3D.txt",
-                     "# 3D point list with one line of data per point:\n"
-                     "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
-                     "# Number of points: 0, mean track length: 0\n");
+  cameras::writeTextFile(folder / "cameras.txt", camerasTxt.str());
+  cameras::writeTextFile(folder / "images.txt", imagesTxt.str());
+  cameras::writeTextFile(
+      folder / "points3D.txt",
+      "# 3D point list with one line of data per point:\n"
+      "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
+      "# Number of points: 0, mean track length: 0\n");
 }
 
 }  // namespace texgrad

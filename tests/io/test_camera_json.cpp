@@ -127,7 +127,7 @@ std::string entry(const std::string& change = "", const std::string& remove = ""
   return text + "}";
 }
 
-std::string file(const std::string& entries) {
+std::string cameraList(const std::string& entries) {
   return R"({"cameras": [)" + entries + "]}";
 }
 
@@ -139,49 +139,53 @@ std::vector<BadJson> badJsonFiles() {
       {"top_key", R"({"cameras": [], "camera": []})", "top level", "unknown key \"camera\""},
       {"no_cameras", "{}", "top level", "\"cameras\" is missing"},
       {"cameras_object", R"({"cameras": {}})", "cameras", "expected an array of cameras"},
-      {"unknown_key", file(entry(R"("Kmatrix": 1)")), "cameras[0]", "unknown key \"Kmatrix\""},
-      {"no_file", file(entry("", "file")), "cameras[0]", "\"file\" is missing"},
-      {"file_number", file(entry(R"("file": 7)")), "cameras[0].file", "found 7"},
-      {"file_lines", file(entry(R"("file": "a\nb.jpg")")), "cameras[0].file", "control character"},
-      {"file_empty", file(entry(R"("file": "")")), "cameras[0].file", "the image name is empty"},
+      {"unknown_key", cameraList(entry(R"("Kmatrix": 1)")), "cameras[0]",
+       "unknown key \"Kmatrix\""},
+      {"no_file", cameraList(entry("", "file")), "cameras[0]", "\"file\" is missing"},
+      {"file_number", cameraList(entry(R"("file": 7)")), "cameras[0].file", "found 7"},
+      {"file_lines", cameraList(entry(R"("file": "a\nb.jpg")")), "cameras[0].file",
+       "control character"},
+      {"file_empty", cameraList(entry(R"("file": "")")), "cameras[0].file",
+       "the image name is empty"},
       {"C_far",
-       file(entry(R"("C": [1.5e308, 1.5e308, 0], "R": [[0.6, 0.8, 0], [-0.8, 0.6, 0], [0, 0, 1]])",
-                  "R")),
+       cameraList(entry(
+           R"("C": [1.5e308, 1.5e308, 0], "R": [[0.6, 0.8, 0], [-0.8, 0.6, 0], [0, 0, 1]])", "R")),
        "cameras[0].C", "too far out"},
-      {"zero_width", file(entry(R"("width": 0)")), "cameras[0].width", "found 0"},
-      {"fractional_height", file(entry(R"("height": 48.5)")), "cameras[0].height",
+      {"zero_width", cameraList(entry(R"("width": 0)")), "cameras[0].width", "found 0"},
+      {"fractional_height", cameraList(entry(R"("height": 48.5)")), "cameras[0].height",
        "positive whole number"},
-      {"string_width", file(entry(R"("width": "64")")), "cameras[0].width", "found \"64\""},
-      {"K_rows", file(entry(R"("K": [[50, 0, 32], [0, 50, 24]])")), "cameras[0].K",
+      {"string_width", cameraList(entry(R"("width": "64")")), "cameras[0].width", "found \"64\""},
+      {"K_rows", cameraList(entry(R"("K": [[50, 0, 32], [0, 50, 24]])")), "cameras[0].K",
        "expected 3 rows of 3 numbers"},
-      {"K_short_row", file(entry(R"("K": [[50, 0, 32], [0, 50], [0, 0, 1]])")), "cameras[0].K[1]",
-       "expected 3 rows of 3 numbers"},
-      {"K_last_row", file(entry(R"("K": [[50, 0, 32], [0, 50, 24], [0, 0, 2]])")), "cameras[0].K",
-       "[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]"},
-      {"K_null", file(entry(R"("K": [[50, 0, 32], [0, null, 24], [0, 0, 1]])")),
+      {"K_short_row", cameraList(entry(R"("K": [[50, 0, 32], [0, 50], [0, 0, 1]])")),
+       "cameras[0].K[1]", "expected 3 rows of 3 numbers"},
+      {"K_last_row", cameraList(entry(R"("K": [[50, 0, 32], [0, 50, 24], [0, 0, 2]])")),
+       "cameras[0].K", "[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]"},
+      {"K_null", cameraList(entry(R"("K": [[50, 0, 32], [0, null, 24], [0, 0, 1]])")),
        "cameras[0].K[1][1]", "expected a number, found null"},
-      {"K_overflow", file(entry(R"("K": [[1e999, 0, 32], [0, 50, 24], [0, 0, 1]])")),
+      {"K_overflow", cameraList(entry(R"("K": [[1e999, 0, 32], [0, 50, 24], [0, 0, 1]])")),
        "not valid JSON", "number overflow parsing '1e999'"},
-      {"K_negative_focal", file(entry(R"("K": [[-50, 0, 32], [0, 50, 24], [0, 0, 1]])")),
+      {"K_negative_focal", cameraList(entry(R"("K": [[-50, 0, 32], [0, 50, 24], [0, 0, 1]])")),
        "cameras[0].K", "must be positive"},
-      {"R_scaled", file(entry(R"("R": [[2, 0, 0], [0, 2, 0], [0, 0, 2]])")), "cameras[0].R",
+      {"R_scaled", cameraList(entry(R"("R": [[2, 0, 0], [0, 2, 0], [0, 0, 2]])")), "cameras[0].R",
        "not a rotation"},
-      {"R_mirror", file(entry(R"("R": [[-1, 0, 0], [0, 1, 0], [0, 0, 1]])")), "cameras[0].R",
+      {"R_mirror", cameraList(entry(R"("R": [[-1, 0, 0], [0, 1, 0], [0, 0, 1]])")), "cameras[0].R",
        "not a rotation"},
-      {"C_and_t", file(entry(R"("t": [0, 0, 5])")), "cameras[0]", "not both"},
-      {"neither_C_nor_t", file(entry("", "C")), "cameras[0]",
+      {"C_and_t", cameraList(entry(R"("t": [0, 0, 5])")), "cameras[0]", "not both"},
+      {"neither_C_nor_t", cameraList(entry("", "C")), "cameras[0]",
        "the camera centre \"C\" (or the translation \"t\") is missing"},
-      {"C_word", file(entry(R"("C": [0, "one", 0])")), "cameras[0].C[1]", "found \"one\""},
-      {"distortion_model", file(entry(R"("distortion": {"model": "fisheye"})")),
+      {"C_word", cameraList(entry(R"("C": [0, "one", 0])")), "cameras[0].C[1]", "found \"one\""},
+      {"distortion_model", cameraList(entry(R"("distortion": {"model": "fisheye"})")),
        "cameras[0].distortion.model", "unknown distortion model \"fisheye\""},
-      {"distortion_extra", file(entry(R"("distortion": {"model": "radial", "k1": 0, "k2": 0,
+      {"distortion_extra", cameraList(entry(R"("distortion": {"model": "radial", "k1": 0, "k2": 0,
        "p1": 0})")),
        "cameras[0].distortion", "\"p1\" is not a coefficient of the radial model"},
-      {"distortion_missing", file(entry(R"("distortion": {"model": "radial", "k1": 0.1})")),
+      {"distortion_missing", cameraList(entry(R"("distortion": {"model": "radial", "k1": 0.1})")),
        "cameras[0].distortion", "\"k2\" is missing"},
-      {"duplicate_file", file(entry() + ", " + entry()), "cameras[1].file",
+      {"duplicate_file", cameraList(entry() + ", " + entry()), "cameras[1].file",
        "'a.jpg' is listed twice (also cameras[0])"},
-      {"second_entry", file(entry() + ", 3"), "cameras[1]", "expected an object, found 3"},
+      {"no_cameras_listed", R"({"cameras": []})", "no calibrated photo", ""},
+      {"second_entry", cameraList(entry() + ", 3"), "cameras[1]", "expected an object, found 3"},
   };
 }
 
@@ -203,7 +207,7 @@ TEST(CameraJson, BadInputGetsOneLineNamingFileAndElement) {
 
 TEST(CameraJson, SkewIsUnsupported) {
   const std::filesystem::path path =
-      jsonFile("skew", file(entry(R"("K": [[50, 0.5, 32], [0, 50, 24], [0, 0, 1]])")));
+      jsonFile("skew", cameraList(entry(R"("K": [[50, 0.5, 32], [0, 50, 24], [0, 0, 1]])")));
   EXPECT_THROW(readCameraFile(path), UnsupportedError);
 }
 

@@ -73,8 +73,9 @@ Eigen::Matrix3d intrinsics(double fx, double fy, double cx, double cy) {
 }
 
 /// One platform holding `cameras` and `poses`, then `images`, then an empty point cloud.
-std::string scene(uint32_t version, const std::vector<MvsCameraSpec>& cameras,
-                  const std::vector<MvsPoseSpec>& poses, const std::vector<MvsImageSpec>& images) {
+std::string mvsScene(uint32_t version, const std::vector<MvsCameraSpec>& cameras,
+                     const std::vector<MvsPoseSpec>& poses,
+                     const std::vector<MvsImageSpec>& images) {
   MvsBytes b(version);
   b.u64(1);  // platforms
   b.string("platform000");
@@ -138,8 +139,8 @@ TEST(OpenMvs, ReadsCalibratedImagesOfEveryVersion) {
     SCOPED_TRACE("archive version " + std::to_string(version));
     MvsCameraSpec camera;
     camera.K = intrinsics(500, 510, 319.5, 239.5);
-    const std::string bytes = scene(version, {camera}, {lookingAtOrigin()},
-                                    {{"a.jpg", 0, 0, 0}, {"uncalibrated.jpg", 0, 0, kNoId}});
+    const std::string bytes = mvsScene(version, {camera}, {lookingAtOrigin()},
+                                       {{"a.jpg", 0, 0, 0}, {"uncalibrated.jpg", 0, 0, kNoId}});
     const std::vector<Camera> cameras = readCameraFile(mvsFile("versions", bytes));
     ASSERT_EQ(cameras.size(), 1u);  // the image without a pose is left out, as OpenMVS does
     const Camera& c = cameras[0];
@@ -169,7 +170,7 @@ TEST(OpenMvs, CameraPoseOnPlatformIsComposed) {
   pose.R = Eigen::AngleAxisd(-0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   pose.C = {1, 2, 3};
   const std::vector<Camera> cameras =
-      readCameraFile(mvsFile("rig", scene(5, {camera}, {pose}, {{"rig.png", 0, 0, 0}})));
+      readCameraFile(mvsFile("rig", mvsScene(5, {camera}, {pose}, {{"rig.png", 0, 0, 0}})));
   ASSERT_EQ(cameras.size(), 1u);
   for (const Eigen::Vector3d& X : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(4, -1, 7)}) {
     const Eigen::Vector3d onPlatform = pose.R * (X - pose.C);
@@ -182,7 +183,7 @@ TEST(OpenMvs, EveryTruncationIsRefused) {
   MvsCameraSpec camera;
   camera.K = intrinsics(500, 500, 320, 240);
   const std::string bytes =
-      scene(7, {camera}, {lookingAtOrigin()}, {{"a.jpg", 0, 0, 0}, {"b.jpg", 0, 0, 0}});
+      mvsScene(7, {camera}, {lookingAtOrigin()}, {{"a.jpg", 0, 0, 0}, {"b.jpg", 0, 0, 0}});
   // The images end 24 bytes before the end (three empty point arrays are not read).
   const size_t imagesEnd = bytes.size() - 24;
   const std::filesystem::path path = tempDir("camera_mvs_truncated") / "scene.mvs";
@@ -217,35 +218,37 @@ TEST(OpenMvs, BadScenesNameTheElement) {
   const auto has = [](const std::string& message, const std::string& words) {
     return message.find(words) != std::string::npos;
   };
-  EXPECT_TRUE(has(mvsError("platform", scene(5, {camera}, {pose}, {{"a.jpg", 2, 0, 0}})),
+  EXPECT_TRUE(has(mvsError("platform", mvsScene(5, {camera}, {pose}, {{"a.jpg", 2, 0, 0}})),
                   "images[0]: platform 2 does not exist"));
-  EXPECT_TRUE(has(mvsError("pose", scene(5, {camera}, {pose}, {{"a.jpg", 0, 0, 1}})),
+  EXPECT_TRUE(has(mvsError("pose", mvsScene(5, {camera}, {pose}, {{"a.jpg", 0, 0, 1}})),
                   "images[0]: camera 0 or pose 1 does not exist"));
-  EXPECT_TRUE(has(
-      mvsError("duplicate", scene(5, {camera}, {pose}, {{"a.jpg", 0, 0, 0}, {"a.jpg", 0, 0, 0}})),
-      "images[1].name: photo 'a.jpg' is listed twice"));
+  EXPECT_TRUE(has(mvsError("duplicate",
+                           mvsScene(5, {camera}, {pose}, {{"a.jpg", 0, 0, 0}, {"a.jpg", 0, 0, 0}})),
+                  "images[1].name: photo 'a.jpg' is listed twice"));
   MvsPoseSpec scaled = pose;
   scaled.R *= 2;
-  EXPECT_TRUE(has(mvsError("rotation", scene(5, {camera}, {scaled}, {{"a.jpg", 0, 0, 0}})),
+  EXPECT_TRUE(has(mvsError("rotation", mvsScene(5, {camera}, {scaled}, {{"a.jpg", 0, 0, 0}})),
                   "platforms[0].poses[0].R: not a rotation"));
   MvsCameraSpec nan = camera;
   nan.K(0, 2) = std::nan("");
-  EXPECT_TRUE(has(mvsError("nan", scene(5, {nan}, {pose}, {{"a.jpg", 0, 0, 0}})),
+  EXPECT_TRUE(has(mvsError("nan", mvsScene(5, {nan}, {pose}, {{"a.jpg", 0, 0, 0}})),
                   "platforms[0].cameras[0].K: holds a number that is not finite"));
   MvsCameraSpec skewed = camera;
   skewed.K(0, 1) = 0.5;
-  EXPECT_THROW(readCameraFile(mvsFile("skew", scene(5, {skewed}, {pose}, {{"a.jpg", 0, 0, 0}}))),
+  EXPECT_THROW(readCameraFile(mvsFile("skew", mvsScene(5, {skewed}, {pose}, {{"a.jpg", 0, 0, 0}}))),
                UnsupportedError);
   MvsCameraSpec normalised = camera;
   normalised.width = normalised.height = 0;
-  EXPECT_TRUE(has(mvsError("normalised", scene(5, {normalised}, {pose}, {{"a.jpg", 0, 0, 0}})),
+  EXPECT_TRUE(has(mvsError("normalised", mvsScene(5, {normalised}, {pose}, {{"a.jpg", 0, 0, 0}})),
                   "normalised intrinsics"));
-  EXPECT_TRUE(has(mvsError("version0", scene(0, {camera}, {pose}, {{"a.jpg", 0, 0, 0}})),
+  EXPECT_TRUE(has(mvsError("version0", mvsScene(0, {camera}, {pose}, {{"a.jpg", 0, 0, 0}})),
                   "normalised intrinsics"));
-  std::string newer = scene(5, {camera}, {pose}, {{"a.jpg", 0, 0, 0}});
+  EXPECT_TRUE(has(mvsError("no_pose", mvsScene(5, {camera}, {pose}, {{"a.jpg", 0, 0, kNoId}})),
+                  "no calibrated photo"));
+  std::string newer = mvsScene(5, {camera}, {pose}, {{"a.jpg", 0, 0, 0}});
   newer[4] = 8;  // the version field
   EXPECT_TRUE(has(mvsError("newer", newer), "archive version 8 is newer"));
-  std::string huge = scene(5, {camera}, {pose}, {{"a.jpg", 0, 0, 0}});
+  std::string huge = mvsScene(5, {camera}, {pose}, {{"a.jpg", 0, 0, 0}});
   const uint64_t claimed = uint64_t(1) << 60;
   std::memcpy(huge.data() + 12, &claimed, sizeof claimed);  // the platform count
   EXPECT_TRUE(has(mvsError("huge", huge), "platforms: the file claims 1152921504606846976"));

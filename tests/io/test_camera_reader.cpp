@@ -24,7 +24,7 @@ using test::expectSameCameras;
 using test::randomCameras;
 using test::tempDir;
 
-void writeFile(const std::filesystem::path& path, const std::string& text) {
+void writeTextFile(const std::filesystem::path& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
 }
 
@@ -32,8 +32,8 @@ void writeFile(const std::filesystem::path& path, const std::string& text) {
 std::filesystem::path colmapModel(const std::string& test, const std::string& camerasTxt,
                                   const std::string& imagesTxt) {
   const std::filesystem::path dir = tempDir("cameras_" + test);
-  writeFile(dir / "cameras.txt", camerasTxt);
-  writeFile(dir / "images.txt", imagesTxt);
+  writeTextFile(dir / "cameras.txt", camerasTxt);
+  writeTextFile(dir / "images.txt", imagesTxt);
   return dir;
 }
 
@@ -261,7 +261,7 @@ TEST(ColmapText, UnsupportedModelsAreUnsupportedErrors) {
 
 TEST(ColmapText, FolderWithoutTextModelSaysHowToConvert) {
   const std::filesystem::path dir = tempDir("cameras_binary_model");
-  writeFile(dir / "cameras.bin", "binary");
+  writeTextFile(dir / "cameras.bin", "binary");
   try {
     readCameraFile(dir);
     ADD_FAILURE() << "no exception";
@@ -320,13 +320,25 @@ TEST(CameraImages, PhotoOfAnotherSizeIsRefused) {
 TEST(CameraImages, UnreadablePhotoIsRefused) {
   const std::filesystem::path dir =
       colmapModel("photo_garbage", kGoodCamera, "1 1 0 0 0 0 0 0 1 a.png\n\n");
-  writeFile(dir / "a.png", "not an image");
+  writeTextFile(dir / "a.png", "not an image");
   EXPECT_THROW(readCameras(dir, dir), InvalidInputError);
+}
+
+TEST(CameraFiles, FileWithoutCamerasIsRefused) {
+  const std::filesystem::path dir = colmapModel("no_images", kGoodCamera, "# no images\n");
+  try {
+    readCameraFile(dir / "images.txt");
+    ADD_FAILURE() << "no exception";
+  } catch (const InvalidInputError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind((dir / "images.txt").string() + ": no calibrated photo", 0), 0u)
+        << message;
+  }
 }
 
 TEST(CameraFiles, UnknownKindIsRefused) {
   const std::filesystem::path dir = tempDir("cameras_unknown_kind");
-  writeFile(dir / "cams.xml", "<cameras/>");
+  writeTextFile(dir / "cams.xml", "<cameras/>");
   EXPECT_THROW(readCameraFile(dir / "cams.xml"), UnsupportedError);
   EXPECT_THROW(readCameraFile(dir / "missing"), IoError);
 }

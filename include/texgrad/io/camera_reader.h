@@ -14,10 +14,10 @@ namespace texgrad {
 /// `path` is a folder holding COLMAP's text model (cameras.txt + images.txt), either of those two
 /// files (the other is taken from the same folder), a `.json` file in texgrad's camera JSON, or
 /// an OpenMVS scene `.mvs` (its calibrated images; conventions in docs/photos.md). Cameras come in
-/// the file's image order. Throws InvalidInputError naming the
-/// file and line (or JSON element) of malformed, non-finite or inconsistent entries,
-/// UnsupportedError for camera models texgrad does not apply (naming the model), IoError when a
-/// file cannot be read.
+/// the file's image order. Throws InvalidInputError for a file without any camera and naming the
+/// file and line (or element) of malformed, non-finite or inconsistent entries, UnsupportedError
+/// for camera models texgrad does not apply (naming the model), IoError when a file cannot be
+/// read.
 std::vector<Camera> readCameraFile(const std::filesystem::path& path);
 
 /// Sets each camera's imagePath to imagesDir / name and checks that the photo exists and that
