@@ -85,7 +85,7 @@ void addProjectCommand(CLI::App& app) {
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   addPhotoOptions(cmd, args->photos);
-  cmd->add_option("--resolution", args->resolution, "Texture size WxH (or N for N x N)")
+  cmd->add_option("--resolution,-r", args->resolution, "Texture size WxH (or N for N x N)")
       ->required()
       ->check(resolutionValidator());
   cmd->add_option("--out-dir", args->outDir, "Folder for partial-NN.png and confidence-NN.png")

@@ -93,7 +93,7 @@ void addTextureCommand(CLI::App& app) {
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   addPhotoOptions(cmd, args->photos);
-  cmd->add_option("--resolution", args->resolution, "Texture size WxH (or N for N x N)")
+  cmd->add_option("--resolution,-r", args->resolution, "Texture size WxH (or N for N x N)")
       ->check(resolutionValidator());
   cmd->add_option("--out,-o", args->out, "Output image, or .gltf/.glb for a glTF copy")->required();
   cmd->add_option("--select", args->select,

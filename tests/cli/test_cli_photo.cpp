@@ -34,6 +34,38 @@ Image writeCapture(const std::filesystem::path& dir, const TexturedMesh& mesh,
   return truth;
 }
 
+TEST(CliPhoto, CameraThatSeesNothingIsAWarningNotAFailure) {
+  const auto dir = tempDir("cli_photo_coverage");
+  const Camera front = lookAtCamera("front.png", {0.0, 0.0, 4.0}, Eigen::Vector3d::Zero(),
+                                    Eigen::Vector3d::UnitY(), 64, 48, 60.0);
+  Camera away = front;
+  away.name = "away.png";
+  away.R = Eigen::Vector3d(-1.0, 1.0, -1.0).asDiagonal() * front.R;
+  away.t = -away.R * front.centre();
+  std::filesystem::create_directories(dir / "images");
+  for (const Camera& c : {front, away})
+    writeImage(dir / "images" / c.name, Image(c.width, c.height, 3, PixelFormat::UInt8));
+  writeCameraJson(dir / "both.json", {front, away});
+  writeCameraJson(dir / "away.json", {away});
+
+  const CliResult r = runCli({"project", "builtin:cube", "--cameras", "both.json", "--images",
+                              "images", "-r", "64", "--out-dir", "views"},
+                             dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("texgrad: warning: camera 'away.png' sees no texel"), std::string::npos)
+      << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "views/partial-00.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "views/partial-01.png"));
+
+  // No camera sees the mesh: texture stops with one error line after the warning.
+  const CliResult none = runCli({"texture", "builtin:cube", "--cameras", "away.json", "--images",
+                                 "images", "-r", "64", "--out", "t.png"},
+                                dir);
+  EXPECT_EQ(none.status, 1);
+  EXPECT_NE(none.err.find("texgrad: error: no camera"), std::string::npos) << none.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "t.png"));
+}
+
 TEST(CliPhoto, TextureFromSyntheticCaptureBeatsBestViewSlow) {
   const auto dir = tempDir("cli_photo_texture");
   const std::string spot = (sharedData() / "spot/spot_triangulated.obj").string();
