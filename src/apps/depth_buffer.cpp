@@ -62,11 +62,16 @@ void DepthBuffer::rasterise(const Eigen::Vector3d (&corners)[3], int32_t face) {
   const double hix = std::max({s[0].x(), s[1].x(), s[2].x()});
   const double loy = std::min({s[0].y(), s[1].y(), s[2].y()});
   const double hiy = std::max({s[0].y(), s[1].y(), s[2].y()});
-  // Sample (i, j) sits at (i + 0.5, j + 0.5).
-  const int i0 = std::max(0, static_cast<int>(std::ceil(lox - 0.5)));
-  const int i1 = std::min(width_ - 1, static_cast<int>(std::floor(hix - 0.5)));
-  const int j0 = std::max(0, static_cast<int>(std::ceil(loy - 0.5)));
-  const int j1 = std::min(height_ - 1, static_cast<int>(std::floor(hiy - 0.5)));
+  // Sample (i, j) sits at (i + 0.5, j + 0.5); clamped in double first, since corners near the
+  // near plane project far outside the buffer (beyond int range).
+  auto sample = [](double c, int size, bool up) {
+    const double at = up ? std::ceil(c - 0.5) : std::floor(c - 0.5);
+    return static_cast<int>(std::clamp(at, -1.0, static_cast<double>(size)));
+  };
+  const int i0 = std::max(0, sample(lox, width_, true));
+  const int i1 = std::min(width_ - 1, sample(hix, width_, false));
+  const int j0 = std::max(0, sample(loy, height_, true));
+  const int j1 = std::min(height_ - 1, sample(hiy, height_, false));
   for (int j = j0; j <= j1; ++j)
     for (int i = i0; i <= i1; ++i) {
       const Eigen::Vector2d q(i + 0.5, j + 0.5);
@@ -89,9 +94,8 @@ void DepthBuffer::rasterise(const Eigen::Vector3d (&corners)[3], int32_t face) {
 
 int32_t DepthBuffer::faceAt(const Eigen::Vector2d& q) const {
   const Eigen::Vector2d b = (q - lo_) * scale_;
-  if (!(b.x() >= 0.0 && b.y() >= 0.0)) return -1;
-  const auto i = static_cast<int64_t>(b.x()), j = static_cast<int64_t>(b.y());
-  if (i >= width_ || j >= height_) return -1;
+  if (!(b.x() >= 0.0 && b.y() >= 0.0 && b.x() < width_ && b.y() < height_)) return -1;
+  const auto i = static_cast<int>(b.x()), j = static_cast<int>(b.y());
   return face_[static_cast<size_t>(j) * static_cast<size_t>(width_) + static_cast<size_t>(i)];
 }
 
