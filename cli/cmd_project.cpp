@@ -36,7 +36,8 @@ void runProject(const ProjectArgs& args) {
   std::vector<Camera> cameras = readPhotoCameras(args.photos);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), width, height, {},
+  // Projection reads the basis and S only (surface points, normals): no re-assembly.
+  const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
                            terminalProgress(!args.report.quiet));
   timer.lap("operators");
   const PhotoProjector projector(domain, args.photos.options);
