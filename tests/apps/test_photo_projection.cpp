@@ -156,7 +156,38 @@ TEST(PhotoProjection, HiddenAndBackFacingTexelsGetZeroConfidence) {
   EXPECT_GT(away, 500);
 }
 
-TEST(PhotoProjection, SyntheticCaptureStitchesToTheTrueTexture) {
+TEST(PhotoProjection, MaskBlackRemovesTexelsWhiteKeepsThem) {
+  TexturedMesh mesh;
+  addSquare(mesh, -1.0, 1.0, 0.0, true, 0.05, 0.95);
+  const TexelDomain domain(std::move(mesh), 128, 128);
+  const Camera camera = test::lookAtCamera("top.png", {0.0, 0.0, 4.0}, Eigen::Vector3d::Zero(),
+                                           Eigen::Vector3d::UnitY(), 400, 300, 250.0);
+  Image mask(400, 300, 1);
+  for (int j = 0; j < 300; ++j)
+    for (int i = 200; i < 400; ++i) mask.at(i, j) = 1.0f;  // right half usable
+  const PhotoProjector projector(domain);
+  const Image photo(400, 300, 3);
+  const Eigen::MatrixXd whole =
+      gatherTexels(domain.grid(), projector.project(camera, photo).confidence);
+  const Eigen::MatrixXd masked =
+      gatherTexels(domain.grid(), projector.project(camera, photo, &mask).confidence);
+  int removed = 0, kept = 0;
+  for (int u = 0; u < domain.unknowns(); ++u) {
+    const double x =
+        test::projectIndependently(camera, projector.points().position.row(u).transpose()).x();
+    if (x < 199.0) {
+      EXPECT_EQ(masked(u, 0), 0.0);
+      removed += whole(u, 0) > 0.0;
+    } else if (x > 201.0) {
+      EXPECT_EQ(masked(u, 0), whole(u, 0));
+      kept += whole(u, 0) > 0.0;
+    }
+  }
+  EXPECT_GT(removed, 1000);
+  EXPECT_GT(kept, 1000);
+}
+
+TEST(PhotoProjection, SyntheticCaptureStitchesToTheTrueTextureSlow) {
   // Truth: spot's texture at the atlas resolution, band-limited (box filter, then two tent
   // passes); eight views of 320 x 320 pixels, every other one with radial distortion.
   const TexelDomain domain(spot(), 256, 256);
