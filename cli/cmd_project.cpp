@@ -29,11 +29,12 @@ std::filesystem::path numbered(const std::filesystem::path& dir, const char* ste
 void runProject(const ProjectArgs& args) {
   StageTimer timer;
   const auto [width, height] = parseResolution(args.resolution);
+  // Camera file and photo headers first (cheap), so a bad one leaves no empty output folder.
+  std::vector<Camera> cameras = readPhotoCameras(args.photos);
   std::error_code ec;
   std::filesystem::create_directories(args.outDir, ec);
   if (ec) throw IoError("cannot create the output folder '" + args.outDir + "': " + ec.message());
   checkImageOutputArgs(numbered(args.outDir, "partial", 0).string(), "");
-  std::vector<Camera> cameras = readPhotoCameras(args.photos);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   timer.lap("read");
   // Projection reads the basis and S only (surface points, normals): no re-assembly.
