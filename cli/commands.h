@@ -27,6 +27,10 @@ void addLicCommand(CLI::App& app);
 /// `texgrad react`: Gray-Scott reaction-diffusion pattern.
 void addReactCommand(CLI::App& app);
 void addGeodesicCommand(CLI::App& app);  ///< `texgrad geodesic`: heat-method distances.
+/// `texgrad project`: photos to partial textures and confidence maps.
+void addProjectCommand(CLI::App& app);
+/// `texgrad texture`: photos to one seamless texture.
+void addTextureCommand(CLI::App& app);
 /// `texgrad view`: browser viewer server.
 void addViewCommand(CLI::App& app);
 

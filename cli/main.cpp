@@ -37,6 +37,8 @@ int main(int argc, char** argv) {
   texgrad::cli::addLicCommand(app);
   texgrad::cli::addReactCommand(app);
   texgrad::cli::addGeodesicCommand(app);
+  texgrad::cli::addProjectCommand(app);
+  texgrad::cli::addTextureCommand(app);
 #ifdef TEXGRAD_WITH_VIEWER  // TEXGRAD_BUILD_VIEWER
   texgrad::cli::addViewCommand(app);
 #endif

@@ -1,0 +1,100 @@
+// `texgrad project`: calibrated photos onto the atlas, one partial texture and confidence map per
+// camera (the `texgrad stitch --partials/--confidence` pair).
+#include <cstdio>
+#include <filesystem>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "photo_args.h"
+#include "texgrad/core/error.h"
+#include "texgrad/io/image_io.h"
+
+namespace texgrad::cli {
+namespace {
+
+struct ProjectArgs {
+  std::string mesh, resolution, outDir;
+  PhotoArgs photos;
+  ReportArgs report;
+  double weldTolerance = 0.0;
+};
+
+/// `dir`/`stem`-NN.png for view number `index`.
+std::filesystem::path numbered(const std::filesystem::path& dir, const char* stem, int index) {
+  char name[64];
+  std::snprintf(name, sizeof name, "%s-%02d.png", stem, index);
+  return dir / name;
+}
+
+void runProject(const ProjectArgs& args) {
+  StageTimer timer;
+  const auto [width, height] = parseResolution(args.resolution);
+  // Camera file and photo headers first (cheap), so a bad one leaves no empty output folder.
+  std::vector<Camera> cameras = readPhotoCameras(args.photos);
+  std::error_code ec;
+  std::filesystem::create_directories(args.outDir, ec);
+  if (ec) throw IoError("cannot create the output folder '" + args.outDir + "': " + ec.message());
+  checkImageOutputArgs(numbered(args.outDir, "partial", 0).string(), "");
+  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  timer.lap("read");
+  // Projection reads the basis and S only (surface points, normals): no re-assembly.
+  const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
+                           terminalProgress(!args.report.quiet));
+  timer.lap("operators");
+  const PhotoProjector projector(domain, args.photos.options);
+  timer.lap("surface points");
+  nlohmann::json views = nlohmann::json::array();
+  int index = 0;
+  projectEachPhoto(projector, cameras, args.photos, args.report.quiet,
+                   [&](size_t k, PhotoProjection&& view) {
+                     const auto partial = numbered(args.outDir, "partial", index);
+                     const auto confidence = numbered(args.outDir, "confidence", index);
+                     writeImage(partial, view.partial);
+                     writeImage(confidence, view.confidence);
+                     views.push_back({{"camera", cameras[k].name},
+                                      {"partial", partial.string()},
+                                      {"confidence", confidence.string()},
+                                      {"seen_texels", view.seenTexels}});
+                     ++index;
+                   });
+  timer.lap("project");
+  if (!args.report.quiet)
+    std::fprintf(stderr, "wrote %d partial textures and confidence maps (%dx%d) to %s in %.1f s\n",
+                 index, width, height, args.outDir.c_str(), timer.total());
+  if (args.report.timings) timer.print();
+  if (args.report.json)
+    printJson(
+        {{"command", "project"},
+         {"texels", domain.unknowns()},
+         {"cameras", cameras.size()},
+         {"views", views},
+         {"partials", (std::filesystem::path(args.outDir) / "partial-%02d.png").string()},
+         {"confidence", (std::filesystem::path(args.outDir) / "confidence-%02d.png").string()},
+         {"stages", timer.json()}});
+}
+
+}  // namespace
+
+void addProjectCommand(CLI::App& app) {
+  auto args = std::make_shared<ProjectArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "project",
+      "Project calibrated photos onto the texture atlas: per camera that sees the mesh, a "
+      "partial texture (each texel's colour sampled from the photo at its surface point) and a "
+      "confidence map (0 = not seen; falls with viewing angle, coarser photo pixels and nearness "
+      "to the photo's border), written as partial-NN.png / confidence-NN.png for `texgrad stitch "
+      "--partials/--confidence`. Visibility by a depth test against the mesh.");
+  cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
+      ->required();
+  addPhotoOptions(cmd, args->photos);
+  cmd->add_option("--resolution,-r", args->resolution, "Texture size WxH (or N for N x N)")
+      ->required()
+      ->check(resolutionValidator());
+  cmd->add_option("--out-dir", args->outDir, "Folder for partial-NN.png and confidence-NN.png")
+      ->required();
+  addWeldToleranceOption(cmd, args->weldTolerance);
+  addReportOptions(cmd, args->report);
+  cmd->callback([args] { exitStatus = runGuarded([&] { runProject(*args); }); });
+}
+
+}  // namespace texgrad::cli
