@@ -39,7 +39,7 @@ double smoothstep(double x) {
 
 /// False where the radial distortion r (1 + k1 r^2 + k2 r^4) stops growing with r: points beyond
 /// would fold back into the image.
-bool inMonotonicRange(const Distortion& d, const Eigen::Vector2d& normalised) {
+bool inMonotonicRange(const LensDistortion& d, const Eigen::Vector2d& normalised) {
   if (d.model == DistortionModel::None) return true;
   const double r2 = normalised.squaredNorm();
   return 1.0 + 3.0 * d.k1 * r2 + 5.0 * d.k2 * r2 * r2 > 0.0;

@@ -4,7 +4,7 @@
 
 namespace texgrad {
 
-Eigen::Vector2d Distortion::apply(const Eigen::Vector2d& normalised) const {
+Eigen::Vector2d LensDistortion::apply(const Eigen::Vector2d& normalised) const {
   const double x = normalised.x(), y = normalised.y();
   const double r2 = x * x + y * y;
   switch (model) {

@@ -64,7 +64,7 @@ void checkWritable(const Camera& camera, const std::string& where) {
     throw InvalidInputError(where + problem);
   if (camera.width <= 0 || camera.height <= 0)
     throw InvalidInputError(where + "the image size must be positive");
-  const Distortion& d = camera.distortion;
+  const LensDistortion& d = camera.distortion;
   const bool finite = std::isfinite(camera.fx) && std::isfinite(camera.fy) &&
                       std::isfinite(camera.cx) && std::isfinite(camera.cy) &&
                       camera.t.allFinite() && std::isfinite(d.k1) && std::isfinite(d.k2) &&

@@ -158,7 +158,7 @@ void readPose(const Json& entry, const Where& where, Camera& camera) {
   }
 }
 
-Distortion readDistortion(const Json& value, const Where& where) {
+LensDistortion readDistortion(const Json& value, const Where& where) {
   const Json& name = required(value, "model", where);
   const JsonModel* model = nullptr;
   for (const JsonModel& m : jsonModels())
@@ -167,7 +167,7 @@ Distortion readDistortion(const Json& value, const Where& where) {
     (where / "model")
         .fail("unknown distortion model " + describe(name) +
               " (the models are none, simple_radial, radial, opencv)");
-  Distortion d;
+  LensDistortion d;
   d.model = model->model;
   double* slots[] = {&d.k1, &d.k2, &d.p1, &d.p2};
   const std::string_view names[] = {"k1", "k2", "p1", "p2"};
@@ -267,7 +267,7 @@ std::string entryText(const Camera& c, const std::string& where) {
       << row({R(1, 0), R(1, 1), R(1, 2)}) << ", " << row({R(2, 0), R(2, 1), R(2, 2)}) << "],\n"
       << "      \"t\": " << row({c.t.x(), c.t.y(), c.t.z()});
   if (c.distortion.model != DistortionModel::None) {
-    const Distortion& d = c.distortion;
+    const LensDistortion& d = c.distortion;
     const double values[] = {d.k1, d.k2, d.p1, d.p2};
     for (const JsonModel& m : jsonModels()) {
       if (m.model != d.model) continue;

@@ -36,7 +36,7 @@ constexpr ModelSpec kModels[] = {{"SIMPLE_PINHOLE", 3, DistortionModel::None},
                                  {"SIMPLE_RADIAL", 4, DistortionModel::SimpleRadial},
                                  {"RADIAL", 5, DistortionModel::Radial},
                                  {"OPENCV", 8, DistortionModel::OpenCV}};
-/// COLMAP's other models: known, but their lenses are not modelled by Distortion.
+/// COLMAP's other models: known, but their lenses are not modelled by LensDistortion.
 constexpr std::string_view kOtherColmapModels[] = {"OPENCV_FISHEYE",
                                                    "FULL_OPENCV",
                                                    "FOV",
@@ -297,7 +297,7 @@ namespace {
 
 /// The COLMAP model line (MODEL WIDTH HEIGHT PARAMS[]) of a camera.
 std::string modelLine(const Camera& c) {
-  const Distortion& d = c.distortion;
+  const LensDistortion& d = c.distortion;
   const bool oneFocal = c.fx == c.fy;
   std::vector<double> p;
   std::string model;

@@ -15,11 +15,11 @@ constexpr double kExact = 1e-15;  // hand-computed values below are exact to rou
 const Eigen::Vector2d kPoint(0.3, -0.2);  // r² = 0.13
 
 TEST(CameraModel, NoDistortionIsIdentity) {
-  EXPECT_EQ(Distortion{}.apply(kPoint), kPoint);
+  EXPECT_EQ(LensDistortion{}.apply(kPoint), kPoint);
 }
 
 TEST(CameraModel, SimpleRadialMatchesColmap) {
-  Distortion d;
+  LensDistortion d;
   d.model = DistortionModel::SimpleRadial;
   d.k1 = 0.1;
   d.k2 = 7;                                     // unused by the model
@@ -29,7 +29,7 @@ TEST(CameraModel, SimpleRadialMatchesColmap) {
 }
 
 TEST(CameraModel, RadialMatchesColmap) {
-  Distortion d;
+  LensDistortion d;
   d.model = DistortionModel::Radial;
   d.k1 = 0.1;
   d.k2 = -0.05;
@@ -41,7 +41,7 @@ TEST(CameraModel, RadialMatchesColmap) {
 }
 
 TEST(CameraModel, OpenCVMatchesColmap) {
-  Distortion d;
+  LensDistortion d;
   d.model = DistortionModel::OpenCV;
   d.k1 = 0.1;
   d.k2 = -0.05;

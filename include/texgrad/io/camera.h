@@ -13,12 +13,12 @@ namespace texgrad {
 /// Lens distortion models of COLMAP's camera models (none for PINHOLE and SIMPLE_PINHOLE).
 enum class DistortionModel { None, SimpleRadial, Radial, OpenCV };
 
-/// Distortion coefficients applied to normalised image coordinates (x, y) = (X/Z, Y/Z).
+/// Lens distortion coefficients applied to normalised image coordinates (x, y) = (X/Z, Y/Z).
 ///
 /// SimpleRadial uses k1, Radial k1 and k2, OpenCV k1, k2 (radial) and p1, p2 (tangential):
 /// x' = x (1 + k1 r² + k2 r⁴) + 2 p1 x y + p2 (r² + 2 x²), y' likewise with p1 and p2 swapped,
 /// exactly as COLMAP's and OpenCV's models.
-struct Distortion {
+struct LensDistortion {
   DistortionModel model = DistortionModel::None;
   double k1 = 0, k2 = 0, p1 = 0, p2 = 0;  ///< coefficients; unused ones stay 0
 
@@ -39,7 +39,7 @@ struct Camera {
   double cx = 0, cy = 0;            ///< principal point in pixels
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  ///< rotation world -> camera
   Eigen::Vector3d t = Eigen::Vector3d::Zero();      ///< translation world -> camera
-  Distortion distortion;                            ///< lens distortion (none by default)
+  LensDistortion distortion;                        ///< lens distortion (none by default)
 
   /// Camera centre in world coordinates, C = -Rᵀ t.
   Eigen::Vector3d centre() const;
