@@ -64,8 +64,8 @@ void runTexture(TextureArgs args) {
   const Image padded =
       dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image, args.dilate);
   timer.lap("dilate");
-  const PixelFormat stored =
-      writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth);
+  const PixelFormat stored = writeTextureOutput(args.out, domain.mesh(), padded, "baseColor",
+                                                args.bitDepth, args.report.quiet);
   timer.lap("write");
   printWritten(args.report.quiet, args.out, padded, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();
