@@ -14,12 +14,12 @@
 namespace texgrad {
 
 /// Kernel coverage (barelyCoveredTexels: the part of a texel's bilinear kernel that the charts
-/// cover, 1 for a texel inside a chart) below which a solved value is replaced. Filtering the ten
+/// cover, 1 for a texel inside a chart) below which a solved value is bounded. Filtering the ten
 /// shared meshes' textures at 512² (direct solver, beta 0), the texels below 1e-3 held every
 /// value more than 0.074 ranges outside the input's (up to 1.6 ranges on spot, 7.2 on
-/// ycb_scissors, 10 on Lantern); replacing them moved the RMS seam jump of bilinear lookups by at
-/// most 0.014 8-bit steps (Avocado 0.044 -> 0.058), where 1e-2 moved it by up to 0.21 and 0.1 by
-/// up to 1.3 (docs/architecture.md, Bounded results).
+/// ycb_scissors, 10 on Lantern). Bounding moves the RMS seam jump of bilinear lookups by at most
+/// 0.002 8-bit steps at 1024²; replacing the texels below 1e-2 or 0.1 by their neighbours'
+/// average moved it by up to 0.21 and 1.3 (docs/architecture.md, Bounded results).
 inline constexpr double kBarelyCoveredKernel = 1e-3;
 
 /// Unknowns of `domain` (ascending) whose kernel coverage is below kBarelyCoveredKernel.
