@@ -51,7 +51,8 @@ double worstExcess(const TexelDomain& domain, const Image& input, const Image& r
         lo = std::min(lo, input.at(i, j, c));
         hi = std::max(hi, input.at(i, j, c));
       }
-    const double width = std::max(double(hi - lo), 1e-12);
+    if (hi == lo) continue;  // a constant channel has no range to measure in
+    const double width = hi - lo;
     for (Eigen::Index u = 0; u < x.rows(); ++u)
       if (!skipped[static_cast<size_t>(u)])
         worst = std::max({worst, (lo - x(u, c)) / width, (x(u, c) - hi) / width});
