@@ -211,6 +211,15 @@ void addWeldToleranceOption(CLI::App* cmd, double& tolerance) {
       ->check(CLI::NonNegativeNumber);
 }
 
+void addRawSolutionFlag(CLI::App* cmd, bool& raw) {
+  cmd->add_flag("--raw", raw,
+                "Keep the exact solution at barely covered texels (the charts cover less than "
+                "1/1000 of the texel's bilinear kernel): the surface hardly determines their "
+                "values, which can lie far outside the input's range. By default each is clamped "
+                "into the range of its input value and its neighbours' values, what the surface "
+                "shows there");
+}
+
 SolverSettings SolverArgs::settings() const {
   SolverSettings s;
   s.kind = parseSolverKind(kind);

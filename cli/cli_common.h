@@ -57,6 +57,10 @@ void printJson(const nlohmann::json& document);
 /// Registers --weld-tolerance (model units; 0 = weld exactly coincident positions only).
 void addWeldToleranceOption(CLI::App* cmd, double& tolerance);
 
+/// Registers --raw (keep the solver's values at barely covered texels; the library's
+/// rawSolution option).
+void addRawSolutionFlag(CLI::App* cmd, bool& raw);
+
 /// Solver flags shared by every command that solves (--solver, --cycles, --levels, ...).
 struct SolverArgs {
   std::string kind = "multigrid";

@@ -125,6 +125,7 @@ void addFilterCommand(CLI::App& app) {
       ->default_val("baseColor");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input texture's"));
   addWeldToleranceOption(cmd, args->weldTolerance);
+  addRawSolutionFlag(cmd, args->options.rawSolution);
   addSolverOptions(cmd, args->solver, FilterOptions().solver);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runFilter(*args); }); });

@@ -12,6 +12,7 @@ namespace {
 
 struct SeamsArgs {
   std::string mesh, texture, out, mask, slot = "baseColor", bitDepth;
+  SeamsOptions options;
   ReportArgs report;
   double weldTolerance = 0.0;
 };
@@ -26,7 +27,7 @@ void runSeams(const SeamsArgs& args) {
   const TexelDomain domain(std::move(mesh), texture.width, texture.height,
                            OperatorOptions::assembledOnce(), terminalProgress(!args.report.quiet));
   timer.lap("operators");
-  const SeamsResult result = smoothSeams(domain, texture, mask);
+  const SeamsResult result = smoothSeams(domain, texture, mask, args.options);
   timer.lap("solve");
   if (result.unanchoredTexels > 0 && !args.report.quiet)
     std::cerr << "texgrad: note: " << result.unanchoredTexels
@@ -75,6 +76,7 @@ void addSeamsCommand(CLI::App& app) {
       ->default_val("baseColor");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input's"));
   addWeldToleranceOption(cmd, args->weldTolerance);
+  addRawSolutionFlag(cmd, args->options.rawSolution);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runSeams(*args); }); });
 }

@@ -138,6 +138,7 @@ void addStitchCommand(CLI::App& app) {
                 "shading");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input's"));
   addWeldToleranceOption(cmd, args->weldTolerance);
+  addRawSolutionFlag(cmd, args->options.rawSolution);
   SolverSettings solverDefaults;
   solverDefaults.cycles = 10;
   // --solver cg: 20 iterations per cycle, the limit stitch had before it got its own flag.

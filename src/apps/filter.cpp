@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "texgrad/apps/barely_covered.h"
 #include "texgrad/apps/normal_map.h"
 #include "texgrad/apps/texel_signal.h"
 #include "texgrad/core/error.h"
@@ -33,6 +34,7 @@ InteractiveFilter::InteractiveFilter(const TexelDomain& domain, const Image& tex
   x_ = x0_;
   symmetricProduct(domain.operators().mass(), x0_, massX0_);
   symmetricProduct(domain.operators().stiffness(), x0_, stiffnessX0_);
+  if (!options.rawSolution) barely_ = barelyCoveredUnknowns(domain);
   setParameters(options.alpha, options.beta, options.betaPerCell);
 }
 
@@ -74,7 +76,13 @@ SolveReport InteractiveFilter::solve() {
 Image InteractiveFilter::image() const {
   const TexelGrid& grid = domain_.grid();
   Image solved = working_;
-  scatterTexels(grid, x_, solved);
+  if (barely_.empty()) {
+    scatterTexels(grid, x_, solved);
+  } else {
+    Eigen::MatrixXd bounded = x_;
+    boundBarelyCovered(domain_, barely_, x0_, bounded);
+    scatterTexels(grid, bounded, solved);
+  }
   if (normalMap_) {
     renormalize(solved);
     solved = encodeNormalMap(solved, input_);

@@ -4,6 +4,7 @@
 
 #include <numeric>
 
+#include "texgrad/apps/barely_covered.h"
 #include "texgrad/apps/texel_signal.h"
 #include "texgrad/atlas/chart_boundary_texels.h"
 #include "texgrad/core/error.h"
@@ -92,7 +93,8 @@ int64_t dropUnanchored(const SparseViewd& s, std::vector<uint8_t>& candidate) {
 
 }  // namespace
 
-SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const Image& mask) {
+SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const Image& mask,
+                        const SeamsOptions& options) {
   const TexelGrid& grid = domain.grid();
   const TexelOperators& ops = domain.operators();
   const SparseMatrixd& m = ops.mass();
@@ -139,6 +141,11 @@ SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const I
   Eigen::MatrixXd solved = x;
   for (Eigen::Index f = 0; f < nf; ++f)
     solved.row(result.resolved[static_cast<size_t>(f)]) = xf.row(f);
+  if (!options.rawSolution) {
+    std::vector<int32_t> barely = barelyCoveredUnknowns(domain);
+    std::erase_if(barely, [&](int32_t u) { return !isFree[static_cast<size_t>(u)]; });
+    boundBarelyCovered(domain, barely, x, solved);
+  }
   // Fixed texels are written back with their own (unchanged) float values: bit-identical.
   scatterTexels(grid, solved, result.image);
   return result;

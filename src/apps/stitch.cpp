@@ -11,6 +11,7 @@
 #include <map>
 #include <utility>
 
+#include "texgrad/apps/barely_covered.h"
 #include "texgrad/apps/gain_compensation.h"
 #include "texgrad/apps/surface_normals.h"
 #include "texgrad/apps/texel_signal.h"
@@ -74,6 +75,11 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
   solver.initAndUpdate(std::move(a));
   Eigen::MatrixXd x = xbar;
   result.report = solver.solve(rhs, x);
+  if (!options.rawSolution) {
+    std::vector<int32_t> barely = barelyCoveredUnknowns(domain);
+    std::erase_if(barely, [&](int32_t u) { return locked[static_cast<size_t>(u)] != 0; });
+    boundBarelyCovered(domain, barely, xbar, x);
+  }
   for (Eigen::Index u = 0; u < n; ++u)
     if (locked[static_cast<size_t>(u)]) x.row(u) = input.row(u);  // exactly the input
   result.image = like;

@@ -23,6 +23,10 @@ struct FilterOptions {
   std::vector<double> betaPerCell;
   /// Treat the texture as a tangent-space normal map (decode, filter, renormalise, encode).
   bool normalMap = false;
+  /// Keep the solver's values at barely covered texels; by default they are clamped into the
+  /// range the surface shows around them (boundBarelyCovered), which keeps beta <= 1 results
+  /// within 0.1 of the input's range (the exact values reach -9.66 on spot's [0, 1] texture).
+  bool rawSolution = false;
   /// Solver, from the input texture. Default: CG preconditioned by one V-cycle per iteration,
   /// to a relative residual of 1e-4 (at most 320 iterations): measured 0.0014 of an 8-bit step
   /// from the direct solution on white noise over spot at 1024², 0.003 on spot's texture at
@@ -62,7 +66,8 @@ class InteractiveFilter {
   SolveReport step();
   /// Runs the configured number of cycles (or the direct solve).
   SolveReport solve();
-  /// Current solution as an image (input's size, channels and format; inactive texels as input).
+  /// Current solution as an image (input's size, channels and format; inactive texels as input),
+  /// barely covered texels replaced unless FilterOptions::rawSolution.
   Image image() const;
   /// Seconds of the init phase and of the last update.
   double initSeconds() const { return solver_.initSeconds(); }
@@ -76,6 +81,7 @@ class InteractiveFilter {
   double alpha_ = 0.0;  ///< alpha of the last numeric update (0: none yet)
   Eigen::MatrixXd x0_, x_, rhs_;
   Eigen::MatrixXd massX0_, stiffnessX0_;  ///< M x0 and S x0: fixed, reused by every setParameters
+  std::vector<int32_t> barely_;           ///< unknowns replaced in image() (empty with rawSolution)
   SystemSolver solver_;
 };
 

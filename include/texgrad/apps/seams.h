@@ -20,6 +20,15 @@ struct SeamsResult {
   int64_t unanchoredTexels = 0;
 };
 
+/// Options of smoothSeams.
+struct SeamsOptions {
+  /// Keep the solved values at barely covered texels; by default the re-solved ones among them
+  /// are clamped into the range the surface shows around them (boundBarelyCovered): the harmonic
+  /// values there are barely determined (1.7e4 ranges outside the input's on a cube with
+  /// 0.01-texel slivers).
+  bool rawSolution = false;
+};
+
 /// Replaces the boundary texels whose footprint a chart boundary crosses (chartBoundaryTexels; or,
 /// if `mask` is not empty, the active texels where its channel 0 > 0.5) by the values minimising
 /// the Dirichlet energy x^T S x with every other texel fixed: S_FF x_F = -S_FK x_K, solved directly
@@ -27,6 +36,7 @@ struct SeamsResult {
 /// stacked or mirrored charts that no chart boundary crosses stay fixed. Candidates joined by S
 /// to no fixed texel have no data to agree with and are not re-solved (unanchoredTexels). All
 /// texels not re-solved are returned bit for bit.
-SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const Image& mask = {});
+SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const Image& mask = {},
+                        const SeamsOptions& options = {});
 
 }  // namespace texgrad

@@ -28,6 +28,9 @@ struct StitchOptions {
   /// exp(a_k + b_k . n), the first-order model of a view's lighting on a diffuse surface, so that
   /// smooth shading differences inside sources go too (solveLogIllumination).
   bool compensateIllumination = true;
+  /// Keep the solver's values at barely covered texels; by default those not locked are
+  /// clamped into the range the surface shows around them (boundBarelyCovered).
+  bool rawSolution = false;
   SolverSettings solver;
   /// Throws InvalidInputError naming the first bad field.
   void validate() const;
