@@ -1,6 +1,7 @@
 // Shared plumbing of the `texgrad` subcommands (argument parsing, error line, progress bar).
 #include "cli_common.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <array>
@@ -336,8 +337,9 @@ void addSolverOptions(CLI::App* cmd, SolverArgs& args, const SolverSettings& def
 
 void addReportOptions(CLI::App* cmd, ReportArgs& args) {
   cmd->add_flag("--json", args.json,
-                "Print a JSON summary (texels, phases, cycles, residuals) on stdout");
-  cmd->add_flag("--timings", args.timings, "Print the time of each stage on stderr");
+                "Print a JSON summary (texels, phases, cycles, residuals, peak memory) on stdout");
+  cmd->add_flag("--timings", args.timings,
+                "Print the time of each stage and the peak resident memory on stderr");
   cmd->add_flag("--quiet,-q", args.quiet, "No progress bar and no summary line");
 }
 
@@ -366,6 +368,15 @@ void StageTimer::print() const {
   for (const auto& [name, seconds] : stages_)
     std::fprintf(stderr, "  %-12s %8.3f s\n", name.c_str(), seconds);
   std::fprintf(stderr, "  %-12s %8.3f s\n", "total", last_ - start_);
+  std::fprintf(stderr, "  %-12s %8.1f MB\n", "peak memory", double(peakResidentBytes()) / 1e6);
+}
+
+int64_t peakResidentBytes() {
+  // Linux reports ru_maxrss in KiB (the high-water mark of the resident set, VmHWM).
+  constexpr int64_t kBytesPerMaxRssUnit = 1024;
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
+  return int64_t(usage.ru_maxrss) * kBytesPerMaxRssUnit;
 }
 
 nlohmann::json toJson(const SolveReport& report) {

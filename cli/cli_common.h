@@ -99,7 +99,7 @@ class StageTimer {
   void lap(const std::string& name);
   /// Stages as {"name": seconds, ...} plus "total".
   nlohmann::json json() const;
-  /// One line per stage on stderr.
+  /// One line per stage on stderr, then the peak resident memory.
   void print() const;
   /// Seconds from construction to the last lap.
   double total() const { return last_ - start_; }
@@ -108,6 +108,10 @@ class StageTimer {
   std::vector<std::pair<std::string, double>> stages_;
   double start_, last_;
 };
+
+/// The process's peak resident set size so far, in bytes (getrusage's ru_maxrss), printed by
+/// --timings and reported as "peak_rss_bytes" in every solving command's --json.
+int64_t peakResidentBytes();
 
 /// JSON of a solve report: iterations, converged, residuals, RMS changes, phase times.
 nlohmann::json toJson(const SolveReport& report);

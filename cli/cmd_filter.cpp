@@ -66,6 +66,7 @@ void runFilter(FilterArgs args) {
                {"update_seconds", result.updateSeconds},
                {"solve", toJson(result.report)},
                {"stages", timer.json()},
+               {"peak_rss_bytes", peakResidentBytes()},
                {"output", args.out}});
 }
 

@@ -196,6 +196,7 @@ void runGeodesic(GeodesicArgs args) {
          {"divergence", result.timings.divergence},
          {"distance", result.timings.distance}}},
        {"stages", timer.json()},
+       {"peak_rss_bytes", peakResidentBytes()},
        {"output", args.out},
        {"png", args.png}});
 }

@@ -77,6 +77,7 @@ void runLic(LicArgs args) {
                {"diffusion", toJson(result.report.diffusion)},
                {"sharpening", toJson(result.report.sharpening)},
                {"stages", timer.json()},
+               {"peak_rss_bytes", peakResidentBytes()},
                {"output", args.out}});
 }
 

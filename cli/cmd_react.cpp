@@ -75,6 +75,7 @@ void runReact(ReactArgs args) {
                {"u_range", {result.u.minCoeff(), result.u.maxCoeff()}},
                {"v_range", {result.v.minCoeff(), result.v.maxCoeff()}},
                {"stages", timer.json()},
+               {"peak_rss_bytes", peakResidentBytes()},
                {"output", args.out}});
 }
 

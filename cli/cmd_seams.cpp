@@ -48,6 +48,7 @@ void runSeams(const SeamsArgs& args) {
                {"seam_jump_before", before.rms},
                {"seam_jump_after", after.rms},
                {"stages", timer.json()},
+               {"peak_rss_bytes", peakResidentBytes()},
                {"output", args.out}});
   }
 }

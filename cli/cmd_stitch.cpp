@@ -100,6 +100,7 @@ void runStitch(StitchArgs args) {
                {"source_illumination", gainsJson(result.sourceIllumination)},
                {"solve", toJson(result.report)},
                {"stages", timer.json()},
+               {"peak_rss_bytes", peakResidentBytes()},
                {"output", args.out}});
 }
 

@@ -26,11 +26,13 @@ InteractiveFilter::InteractiveFilter(const TexelDomain& domain, const Image& tex
                                      const FilterOptions& options)
     : domain_(domain),
       input_(texture),
-      working_(options.normalMap ? decodeNormalMap(texture) : texture),
+      // A colour texture is solved on input_ itself: no second whole-image copy (24 bytes per
+      // active texel at spot's coverage).
+      working_(options.normalMap ? decodeNormalMap(texture) : Image()),
       normalMap_(options.normalMap),
       solver_(domain.grid(), options.solver) {
   options.validate();
-  x0_ = gatherTexels(domain.grid(), working_);
+  x0_ = gatherTexels(domain.grid(), normalMap_ ? working_ : input_);
   x_ = x0_;
   symmetricProduct(domain.operators().mass(), x0_, massX0_);
   symmetricProduct(domain.operators().stiffness(), x0_, stiffnessX0_);
@@ -75,20 +77,22 @@ SolveReport InteractiveFilter::solve() {
 
 Image InteractiveFilter::image() const {
   const TexelGrid& grid = domain_.grid();
-  Image solved = working_;
-  if (barely_.empty()) {
-    scatterTexels(grid, x_, solved);
-  } else {
-    Eigen::MatrixXd bounded = x_;
+  Eigen::MatrixXd bounded;
+  if (!barely_.empty()) {
+    bounded = x_;
     boundBarelyCovered(domain_, barely_, x0_, bounded);
-    scatterTexels(grid, bounded, solved);
   }
-  if (normalMap_) {
-    renormalize(solved);
-    solved = encodeNormalMap(solved, input_);
-  }
+  const Eigen::MatrixXd& values = barely_.empty() ? x_ : bounded;
   // Only active texels inside the image change; everything else is the input bit for bit.
   Image out = input_;
+  if (!normalMap_) {
+    scatterTexels(grid, values, out);
+    return out;
+  }
+  Image solved = working_;
+  scatterTexels(grid, values, solved);
+  renormalize(solved);
+  solved = encodeNormalMap(solved, input_);
   for (int32_t t : grid.texelOfUnknown) {
     const int x = t % grid.nx, y = t / grid.nx;
     if (!grid.inImage(x, y)) continue;

@@ -14,6 +14,7 @@
 
 #include "texel_operators_impl.h"
 #include "texgrad/core/error.h"
+#include "texgrad/core/storage_bytes.h"
 
 namespace texgrad {
 namespace {
@@ -60,6 +61,13 @@ double meanDiagonal(const SparseRefd& a) {
     for (SparseRefd::InnerIterator it(a, j); it; ++it)
       if (it.row() == j) sum += it.value();
   return sum / static_cast<double>(a.rows());
+}
+
+int64_t sparseStorageBytes(const SparseMatrixd& a) {
+  constexpr int64_t kEntryBytes = sizeof(double) + sizeof(int);
+  const int64_t outer = a.outerIndexPtr() ? (a.outerSize() + 1) * int64_t(sizeof(int)) : 0;
+  const int64_t counts = a.isCompressed() ? 0 : a.outerSize() * int64_t(sizeof(int));
+  return static_cast<int64_t>(a.data().allocatedSize()) * kEntryBytes + outer + counts;
 }
 
 OperatorOptions OperatorOptions::assembledOnce() {
@@ -374,6 +382,13 @@ SparseViewd TexelOperators::stiffness() const {
 const SparseMatrixd& TexelOperators::seamContinuity() const { return impl_->seamContinuity; }
 const fem::TexelBasis& TexelOperators::basis() const { return impl_->basis; }
 const OperatorReport& TexelOperators::report() const { return impl_->report; }
+
+int64_t TexelOperators::storageBytes() const {
+  const Impl& m = *impl_;
+  return sparseStorageBytes(m.mass) + sparseStorageBytes(m.seamContinuity) +
+         capacityBytes(m.stiffnessValues, m.seamValues, m.fullBandBegin, m.partialBandBegin,
+                       m.seamTexels, m.cellCovered, m.metric, m.factors, m.full, m.partial, m.seam);
+}
 
 SparseMatrixd TexelOperators::screenedSystem(double alpha) const {
   // M and S share one pattern: copy M's and combine the values (no sparse merge).

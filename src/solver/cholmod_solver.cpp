@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "texgrad/core/error.h"
+#include "texgrad/core/storage_bytes.h"
 
 namespace texgrad {
 namespace {
@@ -196,6 +197,11 @@ Eigen::ComputationInfo CholmodSolver::info() const {
 }
 
 Eigen::Index CholmodSolver::rows() const { return impl_->n; }
+
+int64_t CholmodSolver::storageBytes() const {
+  return capacityBytes(impl_->colPtr, impl_->rowIdx, impl_->values) +
+         static_cast<int64_t>(impl_->common.memory_inuse);
+}
 
 const CholmodStats& CholmodSolver::stats() const { return impl_->stats; }
 

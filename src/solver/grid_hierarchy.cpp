@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include "texgrad/core/error.h"
+#include "texgrad/core/storage_bytes.h"
 
 namespace texgrad {
 namespace {
@@ -199,6 +200,14 @@ Eigen::SparseMatrix<double> GridHierarchy::prolongation(int l) const {
     throw InvalidInputError("GridHierarchy::prolongation: level " + std::to_string(l) +
                             " has no coarser level (levels: " + std::to_string(levelCount()) + ")");
   return buildProlongation(level(l), level(l + 1));
+}
+
+int64_t GridHierarchy::storageBytes() const {
+  int64_t bytes = capacityBytes(levels_);
+  for (const GridLevel& g : levels_)
+    bytes += capacityBytes(g.boxes, g.boxOfChart, g.unknownOfSlot, g.slotOfUnknown,
+                           g.chartOfUnknown, g.xOfUnknown, g.yOfUnknown, g.footprintInterior);
+  return bytes;
 }
 
 }  // namespace texgrad

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "texgrad/core/error.h"
+#include "texgrad/core/storage_bytes.h"
 
 namespace texgrad::detail {
 namespace {
@@ -319,5 +320,14 @@ template void assignStencils<float>(const GridLevel&, const SparseSum&, const Le
                                     std::vector<float>&);
 template void assignStencils<double>(const GridLevel&, const SparseSum&, const LevelSystem&,
                                      std::vector<double>&);
+
+int64_t LevelSystem::storageBytes() const {
+  return capacityBytes(kind, rows[0], rows[1], boxRows, bands, boundarySlots, boundaryOfUnknown,
+                       interiorUnknowns, offBlockEnd, fixupSlots) +
+         capacityBytes(boundaryRows.ptr, boundaryRows.col, interiorNextToBoundary.ptr,
+                       interiorNextToBoundary.col) +
+         capacityBytes(boundaryRows.val, interiorNextToBoundary.val) +
+         boundarySolver.storageBytes();
+}
 
 }  // namespace texgrad::detail

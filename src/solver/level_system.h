@@ -80,6 +80,8 @@ struct LevelSystem {
   /// Slots of the level: the length of one channel plane of a slot vector.
   int64_t slotCount() const { return static_cast<int64_t>(kind.size()); }
   int boundaryCount() const { return static_cast<int>(boundarySlots.size()); }
+  /// Bytes held: the arrays' capacity and the boundary factorisation.
+  int64_t storageBytes() const;
 };
 
 /// The 3 x 3 stencil of row u of `a` (index (dy + 1) * 3 + (dx + 1)); entries outside the

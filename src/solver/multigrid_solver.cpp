@@ -19,6 +19,7 @@
 #include "solver/grid_kernels.h"
 #include "solver/line_relaxation.h"
 #include "texgrad/core/error.h"
+#include "texgrad/core/storage_bytes.h"
 #include "texgrad/solver/galerkin.h"
 
 namespace texgrad {
@@ -609,6 +610,21 @@ std::vector<MultigridLevelInfo> MultigridSolver<Scalar>::levelInfo() const {
     info.push_back(i);
   }
   return info;
+}
+
+template <typename Scalar>
+int64_t MultigridSolver<Scalar>::storageBytes() const {
+  const Impl& m = *impl_;
+  int64_t bytes = m.hierarchy.storageBytes() + m.coarseSolver.storageBytes() +
+                  static_cast<int64_t>(m.coarseWork.size()) * int64_t(sizeof(double));
+  for (const auto& lv : m.levels) {
+    bytes += lv.sys.storageBytes() + capacityBytes(lv.stencil, lv.x, lv.b, lv.r, lv.lineCoeffs) +
+             capacityBytes(lv.boxRows) +
+             static_cast<int64_t>(lv.work.size()) * int64_t(sizeof(double));
+    for (const auto& byParity : lv.lines.lines)
+      for (const auto& lines : byParity) bytes += capacityBytes(lines);
+  }
+  return bytes;
 }
 
 template <typename Scalar>

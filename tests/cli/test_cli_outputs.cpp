@@ -151,6 +151,42 @@ INSTANTIATE_TEST_SUITE_P(Cli, EveryBitDepthCommand,
                                            "mask"),
                          [](const auto& p) { return p.param; });
 
+class EverySolvingCommand : public EveryWritingCommand {};
+
+TEST_P(EverySolvingCommand, ReportsItsPeakResidentMemory) {
+  // Any process that has loaded the library and solved holds more than this resident.
+  constexpr int64_t kLeastPlausiblePeak = int64_t(1) << 20;
+  auto args = commandLine(GetParam(), "inside.obj", out());
+  args.push_back("--json");
+  const CliResult json = runCli(args, dir_);
+  ASSERT_EQ(json.status, 0) << joined(args) << json.err;
+  const auto peak = nlohmann::json::parse(json.out).at("peak_rss_bytes");
+  ASSERT_TRUE(peak.is_number_integer()) << peak;
+  EXPECT_GT(peak.get<int64_t>(), kLeastPlausiblePeak);
+  args.back() = "--timings";
+  const CliResult timings = runCli(args, dir_);
+  ASSERT_EQ(timings.status, 0) << joined(args) << timings.err;
+  EXPECT_NE(timings.err.find("peak memory"), std::string::npos) << timings.err;
+}
+
+INSTANTIATE_TEST_SUITE_P(Cli, EverySolvingCommand,
+                         ::testing::Values("filter", "stitch", "seams", "geodesic", "lic", "react"),
+                         [](const auto& p) { return p.param; });
+
+TEST(Cli, PeakResidentMemoryExceedsTheInputImage) {
+  // The process holds the decoded texture, so its peak is above the image's byte size.
+  constexpr int kSize = 512;
+  const auto dir = tempDir("outputs_peak_rss");
+  writeInputs(dir);
+  const Image texture(kSize, kSize, 3, PixelFormat::UInt8);
+  writeImage(dir / "big.png", texture);
+  const CliResult r =
+      runCli({"filter", "inside.obj", "big.png", "-o", "f.png", "--beta", "0", "--json"}, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const int64_t imageBytes = int64_t(kSize) * kSize * texture.channels;
+  EXPECT_GT(nlohmann::json::parse(r.out).at("peak_rss_bytes").get<int64_t>(), imageBytes);
+}
+
 /// Two squares far apart in 3-D: vertices 0-3 with UVs inside the image, 4-7 with UVs outside.
 const char* kTwoIslandsObj =
     "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"

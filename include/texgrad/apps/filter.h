@@ -76,7 +76,7 @@ class InteractiveFilter {
  private:
   const TexelDomain& domain_;
   Image input_;    ///< texture as given
-  Image working_;  ///< values the solve acts on (decoded vectors for normal maps)
+  Image working_;  ///< a normal map's decoded vectors (empty otherwise: the solve acts on input_)
   bool normalMap_;
   double alpha_ = 0.0;  ///< alpha of the last numeric update (0: none yet)
   Eigen::MatrixXd x0_, x_, rhs_;

@@ -28,6 +28,9 @@ using SparseViewd = Eigen::Map<const SparseMatrixd>;
 using SparseRefd = Eigen::Ref<const SparseMatrixd>;
 /// Mean of the diagonal entries of a square sparse matrix (0 for an empty one).
 double meanDiagonal(const SparseRefd& a);
+/// Bytes allocated by a sparse matrix: values and inner indices (their capacity), the outer
+/// indices, and the per-column counts of an uncompressed matrix.
+int64_t sparseStorageBytes(const SparseMatrixd& a);
 
 /// Options of TexelOperators.
 struct OperatorOptions {
@@ -133,6 +136,9 @@ class TexelOperators {
   const fem::TexelBasis& basis() const;
   /// Assembly diagnostics.
   const OperatorReport& report() const;
+  /// Bytes held in the operators' containers: M, S's values, C, the piece integrals while kept,
+  /// per-face metric data (docs/memory.md). The basis, which scales with the mesh, is left out.
+  int64_t storageBytes() const;
 
  private:
   struct Impl;

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <cstdint>
 #include <memory>
 
 namespace texgrad {
@@ -55,6 +56,9 @@ class CholmodSolver {
   Eigen::Index cols() const { return rows(); }
   /// Phase counters and timings accumulated since construction.
   const CholmodStats& stats() const;
+  /// Bytes held: the copied lower triangle plus all CHOLMOD holds (factor and workspace, its
+  /// own count memory_inuse).
+  int64_t storageBytes() const;
 
  private:
   struct Impl;

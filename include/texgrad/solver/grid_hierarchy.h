@@ -83,6 +83,8 @@ class GridHierarchy {
   Eigen::SparseMatrix<double> prolongation(int l) const;
   /// Number of charts (boxes at level 0 are indexed by chart).
   int chartCount() const { return chartCount_; }
+  /// Bytes held by the levels' arrays (their capacity; docs/memory.md).
+  int64_t storageBytes() const;
 
  private:
   std::vector<GridLevel> levels_;

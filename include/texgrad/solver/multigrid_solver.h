@@ -142,6 +142,9 @@ class MultigridSolver {
   std::vector<MultigridLevelInfo> levelInfo() const;
   /// Table of levelInfo().
   std::string summary() const;
+  /// Bytes held: hierarchy, stencils, line coefficients, boundary rows, CHOLMOD factors and
+  /// workspace, and the per-level vectors once a cycle has run (docs/memory.md).
+  int64_t storageBytes() const;
   /// Options in use.
   const MultigridOptions& options() const;
 

@@ -1,0 +1,54 @@
+// Memory is tested, not only benchmarked (issue 28, docs/memory.md): the operators' and the
+// multigrid solver's storage per active texel on a procedural mesh stays under a bound, so a
+// change that makes them hold more fails here. Each bound is the value measured when it was set
+// plus 10% headroom; lower one when a change saves memory.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+
+#include "texgrad/apps/texel_domain.h"
+#include "texgrad/io/procedural.h"
+#include "texgrad/solver/multigrid_solver.h"
+#include "texgrad/solver/sparse_sum.h"
+
+namespace texgrad::test {
+namespace {
+
+constexpr int kSize = 256;          ///< texture width and height
+constexpr double kAlpha = 1e4;      ///< screening weight of `texgrad filter` (paper default)
+constexpr int kChannels = 3;        ///< RGB
+constexpr double kHeadroom = 1.10;  ///< 10% above the value measured when the bound was set
+/// Bytes per active texel measured on cubeSphere() at 256² (assembled once, piece integrals
+/// freed; multigrid in float after one 3-channel cycle).
+constexpr double kOperatorsMeasured = 209.6;
+constexpr double kMultigridMeasured = 302.3;
+
+TEST(StorageBound, OperatorsAndMultigridPerActiveTexelStayUnderTheirBounds) {
+  const TexelDomain domain(procedural::cubeSphere(), kSize, kSize,
+                           OperatorOptions::assembledOnce());
+  const TexelOperators& ops = domain.operators();
+  const auto n = static_cast<double>(domain.unknowns());
+  MultigridSolver<float> solver;
+  solver.initAndUpdate(domain.grid(), SparseSum(kAlpha, ops.mass(), 1.0, ops.stiffness()));
+  const Eigen::Index rows = domain.unknowns();
+  const MultigridSolver<float>::Matrix b = MultigridSolver<float>::Matrix::Ones(rows, kChannels);
+  MultigridSolver<float>::Matrix x = MultigridSolver<float>::Matrix::Zero(rows, kChannels);
+  solver.cycle(b, x);
+
+  const double operatorsPerTexel = static_cast<double>(ops.storageBytes()) / n;
+  const double multigridPerTexel = static_cast<double>(solver.storageBytes()) / n;
+  RecordProperty("operators_bytes_per_texel", std::to_string(operatorsPerTexel));
+  RecordProperty("multigrid_bytes_per_texel", std::to_string(multigridPerTexel));
+  // The reports count what is surely there: M (value and row index) and S's values; the
+  // level-0 vectors x, b, r of the cycle in float.
+  const double matrixFloor =
+      static_cast<double>(ops.mass().nonZeros()) * (2 * sizeof(double) + sizeof(int)) / n;
+  const double vectorFloor = 3.0 * kChannels * sizeof(float);
+  EXPECT_GE(operatorsPerTexel, matrixFloor);
+  EXPECT_GE(multigridPerTexel, vectorFloor);
+  EXPECT_LE(operatorsPerTexel, kOperatorsMeasured * kHeadroom);
+  EXPECT_LE(multigridPerTexel, kMultigridMeasured * kHeadroom);
+}
+
+}  // namespace
+}  // namespace texgrad::test
