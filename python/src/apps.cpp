@@ -207,9 +207,17 @@ py::array mask(const py::handle& target, const py::object& resolution, const std
 
 }  // namespace
 
-/// Geodesic sources from the three keyword lists; InvalidInputError naming the list on a bad one.
+namespace {
+
+/// One point (a 1-D array) as a 1 x k array; other arrays as they are.
+py::object atLeast2d(const py::object& points) {
+  return py::module_::import("numpy").attr("atleast_2d")(points);
+}
+
+}  // namespace
+
 std::vector<GeodesicSource> geodesicSourcesFrom(const py::object& vertices, const py::object& uvs,
-                                            const py::object& points) {
+                                                const py::object& points, size_t vertexCount) {
   std::vector<GeodesicSource> sources;
   if (!vertices.is_none()) {
     const Eigen::MatrixXd v = matrixFromArray(py::array::ensure(vertices).attr("reshape")(-1),
@@ -217,18 +225,22 @@ std::vector<GeodesicSource> geodesicSourcesFrom(const py::object& vertices, cons
     for (Eigen::Index k = 0; k < v.rows(); ++k) {
       if (v(k, 0) != std::floor(v(k, 0)))
         throw InvalidInputError("source_vertices[" + std::to_string(k) + "] is not an integer");
+      // Checked here, before any operator is built (as `texgrad geodesic --source-vertex`).
+      if (v(k, 0) < 0 || v(k, 0) >= static_cast<double>(vertexCount))
+        throw InvalidInputError("source_vertices[" + std::to_string(k) + "] = " +
+                                std::to_string(static_cast<int64_t>(v(k, 0))) +
+                                " is out of range; the mesh has " + std::to_string(vertexCount) +
+                                " vertices (0-based)");
       sources.push_back(GeodesicSource::atVertex(static_cast<int64_t>(v(k, 0))));
     }
   }
   if (!uvs.is_none()) {
-    const Eigen::MatrixXd uv = matrixFromArray(py::array::ensure(uvs).attr("reshape")(-1, 2),
-                                               "source_uvs", 2);
+    const Eigen::MatrixXd uv = matrixFromArray(atLeast2d(uvs), "source_uvs", 2);
     for (Eigen::Index k = 0; k < uv.rows(); ++k)
       sources.push_back(GeodesicSource::atUv(uv.row(k).transpose()));
   }
   if (!points.is_none()) {
-    const Eigen::MatrixXd p = matrixFromArray(py::array::ensure(points).attr("reshape")(-1, 3),
-                                              "source_points", 3);
+    const Eigen::MatrixXd p = matrixFromArray(atLeast2d(points), "source_points", 3);
     for (Eigen::Index k = 0; k < p.rows(); ++k)
       sources.push_back(GeodesicSource::atPoint(p.row(k).transpose()));
   }
@@ -258,8 +270,13 @@ py::object geodesic(const py::handle& target, const py::object& sourceVertices,
   options.boundary = parseGeodesicBoundary(boundary);
   options.solver = solverFrom(options.solver, solver);
   options.validate();
+  if (!py::isinstance<TexelDomain>(target) && !py::isinstance<TexturedMesh>(target))
+    throw py::type_error("mesh must be a texgrad.Mesh or a texgrad.TexelDomain");
+  const size_t vertexCount = py::isinstance<TexelDomain>(target)
+                                 ? target.cast<const TexelDomain&>().mesh().positions.size()
+                                 : target.cast<const TexturedMesh&>().positions.size();
   const std::vector<GeodesicSource> sources =
-      geodesicSourcesFrom(sourceVertices, sourceUvs, sourcePoints);
+      geodesicSourcesFrom(sourceVertices, sourceUvs, sourcePoints, vertexCount);
   std::pair<int, int> fallback{kDefaultGeodesicResolution, kDefaultGeodesicResolution};
   if (resolution.is_none() && py::isinstance<TexturedMesh>(target)) {
     // As `texgrad geodesic`: the size of the mesh's base-colour texture if it names one.

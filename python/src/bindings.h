@@ -71,9 +71,10 @@ std::shared_ptr<TexelDomain> domainFor(const py::handle& target, int width, int 
                                        const OperatorOptions& options,
                                        const py::object& progress);
 
-/// Geodesic sources from the keyword lists source_vertices, source_uvs, source_points.
+/// Geodesic sources from the keyword lists source_vertices, source_uvs, source_points; vertex
+/// indices are checked against `vertexCount`.
 std::vector<GeodesicSource> geodesicSourcesFrom(const py::object& vertices, const py::object& uvs,
-                                                const py::object& points);
+                                                const py::object& points, size_t vertexCount);
 
 void registerErrors(py::module_& m);
 void registerMesh(py::module_& m);

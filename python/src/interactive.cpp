@@ -167,7 +167,7 @@ void registerInteractive(py::module_& m) {
           [](PyGeodesicSolver& self, const py::object& vertices, const py::object& uvs,
              const py::object& points) {
             const std::vector<GeodesicSource> sources =
-                geodesicSourcesFrom(vertices, uvs, points);
+                geodesicSourcesFrom(vertices, uvs, points, self.domain->mesh().positions.size());
             py::gil_scoped_release release;
             self.solver->setSources(sources);
           },
