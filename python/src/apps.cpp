@@ -109,10 +109,9 @@ std::vector<Image> imageList(const py::object& list, const std::string& name) {
   return images;
 }
 
-py::array stitch(const py::handle& target, const py::object& composite,
-                 const py::object& segments, const py::object& partials,
-                 const py::object& confidences, const py::object& lock, double alpha,
-                 bool gainCompensation, bool illumination, const py::object& dtype,
+py::array stitch(const py::handle& target, const py::object& composite, const py::object& segments,
+                 const py::object& partials, const py::object& confidences, const py::object& lock,
+                 double alpha, bool gainCompensation, bool illumination, const py::object& dtype,
                  const py::object& progress, const py::kwargs& solver) {
   StitchOptions options;
   options.alpha = alpha;
@@ -220,15 +219,15 @@ std::vector<GeodesicSource> geodesicSourcesFrom(const py::object& vertices, cons
                                                 const py::object& points, size_t vertexCount) {
   std::vector<GeodesicSource> sources;
   if (!vertices.is_none()) {
-    const Eigen::MatrixXd v = matrixFromArray(py::array::ensure(vertices).attr("reshape")(-1),
-                                              "source_vertices", 1);
+    const Eigen::MatrixXd v =
+        matrixFromArray(py::array::ensure(vertices).attr("reshape")(-1), "source_vertices", 1);
     for (Eigen::Index k = 0; k < v.rows(); ++k) {
       if (v(k, 0) != std::floor(v(k, 0)))
         throw InvalidInputError("source_vertices[" + std::to_string(k) + "] is not an integer");
       // Checked here, before any operator is built (as `texgrad geodesic --source-vertex`).
       if (v(k, 0) < 0 || v(k, 0) >= static_cast<double>(vertexCount))
-        throw InvalidInputError("source_vertices[" + std::to_string(k) + "] = " +
-                                std::to_string(static_cast<int64_t>(v(k, 0))) +
+        throw InvalidInputError("source_vertices[" + std::to_string(k) +
+                                "] = " + std::to_string(static_cast<int64_t>(v(k, 0))) +
                                 " is out of range; the mesh has " + std::to_string(vertexCount) +
                                 " vertices (0-based)");
       sources.push_back(GeodesicSource::atVertex(static_cast<int64_t>(v(k, 0))));
@@ -262,8 +261,8 @@ py::array unknownImage(const TexelDomain& domain, const Eigen::VectorXd& values,
 py::object geodesic(const py::handle& target, const py::object& sourceVertices,
                     const py::object& sourceUvs, const py::object& sourcePoints,
                     const py::object& resolution, double alpha, const std::string& offset,
-                    const std::string& boundary, bool pad, bool details,
-                    const py::object& progress, const py::kwargs& solver) {
+                    const std::string& boundary, bool pad, bool details, const py::object& progress,
+                    const py::kwargs& solver) {
   GeodesicOptions options;
   options.alpha = alpha;
   options.offset = parseGeodesicOffset(offset);
@@ -288,8 +287,7 @@ py::object geodesic(const py::handle& target, const py::object& sourceVertices,
     }
   }
   const auto [width, height] = sizeFor(target, resolution, fallback);
-  const auto domain =
-      domainFor(target, width, height, OperatorOptions::assembledOnce(), progress);
+  const auto domain = domainFor(target, width, height, OperatorOptions::assembledOnce(), progress);
   GeodesicResult result = withProgress(progress, [&](const ProgressCallback& callback) {
     reportProgress(callback, "geodesic", 0.0);
     GeodesicResult r = geodesicDistance(*domain, sources, options);
@@ -331,9 +329,11 @@ FaceVectorField fieldFrom(const TexturedMesh& mesh, const py::object& field,
   }
   const Eigen::MatrixXd v = matrixFromArray(field, "field", -1);
   if ((v.cols() != 2 && v.cols() != 3) || v.rows() != static_cast<Eigen::Index>(mesh.faceCount()))
-    throw InvalidInputError("field must be m x 2 (intrinsic) or m x 3 (3-D vectors) with one row "
-                            "per face (" + std::to_string(mesh.faceCount()) + "), got " +
-                            std::to_string(v.rows()) + " x " + std::to_string(v.cols()));
+    throw InvalidInputError(
+        "field must be m x 2 (intrinsic) or m x 3 (3-D vectors) with one row "
+        "per face (" +
+        std::to_string(mesh.faceCount()) + "), got " + std::to_string(v.rows()) + " x " +
+        std::to_string(v.cols()));
   FaceVectorField result;
   result.basis = v.cols() == 2 ? FieldBasis::Intrinsic : FieldBasis::Extrinsic;
   for (Eigen::Index f = 0; f < v.rows(); ++f)
@@ -385,8 +385,7 @@ py::array react(const py::handle& target, const py::object& resolution, const st
   options.validate();
   if (steps < 0) throw InvalidInputError("steps must be >= 0, got " + std::to_string(steps));
   const auto [width, height] = sizeFor(target, resolution, {512, 512});
-  const auto domain =
-      domainFor(target, width, height, OperatorOptions::assembledOnce(), progress);
+  const auto domain = domainFor(target, width, height, OperatorOptions::assembledOnce(), progress);
   Image output = withProgress(progress, [&](const ProgressCallback& callback) {
     Image image = reactionDiffusion(*domain, options, steps, callback).image;
     return pad ? dilateGutters(domain->mesh(), domain->atlas(), domain->grid(), image) : image;
@@ -425,8 +424,7 @@ void registerApps(py::module_& m) {
         arg("infinite") = false, arg("dtype") = none,
         "Fills `radius` rings of gutter texels around the charts (all with infinite=True); "
         "active texels are returned unchanged (`texgrad dilate`).");
-  m.def("mask", &mask, arg("mesh"), arg("resolution") = none, py::kw_only(),
-        arg("kind") = "active",
+  m.def("mask", &mask, arg("mesh"), arg("resolution") = none, py::kw_only(), arg("kind") = "active",
         "The texel classification at a resolution as a uint8 image: kind 'active', 'boundary', "
         "'interior' (H x W x 1), 'chart' or 'coverage' (H x W x 3) (`texgrad mask`).");
   m.def("geodesic", &geodesic, arg("mesh"), py::kw_only(), arg("source_vertices") = none,
@@ -448,9 +446,9 @@ void registerApps(py::module_& m) {
         "resolution N or (W, H) (default 512). Returns H x W (or H x W x 3 with colour) float32 "
         "in [0, 1], gutters filled as `texgrad lic` writes them.");
   m.def("react", &react, arg("mesh"), arg("resolution") = none, py::kw_only(),
-        arg("preset") = "stripes", arg("steps") = 3000, arg("time_step") = 1.0,
-        arg("scale") = 1.0, arg("seed") = 1, arg("seed_spots") = 40, arg("dilate") = true,
-        arg("dtype") = none, arg("progress") = none,
+        arg("preset") = "stripes", arg("steps") = 3000, arg("time_step") = 1.0, arg("scale") = 1.0,
+        arg("seed") = 1, arg("seed_spots") = 40, arg("dilate") = true, arg("dtype") = none,
+        arg("progress") = none,
         "Gray-Scott reaction-diffusion pattern ('stripes' or 'dots') grown on the surface for "
         "`steps` steps (`texgrad react`), as an H x W float32 image in [0, 1].");
 }

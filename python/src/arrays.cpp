@@ -132,10 +132,18 @@ ImageArgument imageFromArray(const py::handle& handle, const std::string& name) 
   result.image = Image(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)),
                        static_cast<int>(channels), formats[static_cast<int>(result.sampleType)]);
   switch (result.sampleType) {
-    case SampleType::UInt8: readSamples<uint8_t>(a, result.image, name); break;
-    case SampleType::UInt16: readSamples<uint16_t>(a, result.image, name); break;
-    case SampleType::Float32: readSamples<float>(a, result.image, name); break;
-    case SampleType::Float64: readSamples<double>(a, result.image, name); break;
+    case SampleType::UInt8:
+      readSamples<uint8_t>(a, result.image, name);
+      break;
+    case SampleType::UInt16:
+      readSamples<uint16_t>(a, result.image, name);
+      break;
+    case SampleType::Float32:
+      readSamples<float>(a, result.image, name);
+      break;
+    case SampleType::Float64:
+      readSamples<double>(a, result.image, name);
+      break;
   }
   return result;
 }
@@ -144,10 +152,14 @@ py::array arrayFromImage(Image&& image, SampleType type, bool planar) {
   const Image owned = std::move(image);
   planar = planar && owned.channels == 1;
   switch (type) {
-    case SampleType::UInt8: return writeSamples<uint8_t>(owned, planar);
-    case SampleType::UInt16: return writeSamples<uint16_t>(owned, planar);
-    case SampleType::Float32: return writeSamples<float>(owned, planar);
-    case SampleType::Float64: break;
+    case SampleType::UInt8:
+      return writeSamples<uint8_t>(owned, planar);
+    case SampleType::UInt16:
+      return writeSamples<uint16_t>(owned, planar);
+    case SampleType::Float32:
+      return writeSamples<float>(owned, planar);
+    case SampleType::Float64:
+      break;
   }
   return writeSamples<double>(owned, planar);
 }
@@ -163,8 +175,7 @@ Eigen::MatrixXd matrixFromArray(const py::handle& handle, const std::string& nam
                                 Eigen::Index cols) {
   const py::array raw = asArray(handle, name);
   if (raw.dtype().kind() != 'f' && raw.dtype().kind() != 'u' && raw.dtype().kind() != 'i')
-    throw py::type_error(name + " has dtype " + textOf(raw.dtype()) +
-                         "; numbers are needed");
+    throw py::type_error(name + " has dtype " + textOf(raw.dtype()) + "; numbers are needed");
   const auto a = py::array_t<double, py::array::forcecast>::ensure(raw);
   if (a.ndim() == 1 && (cols < 0 || cols == 1)) {
     Eigen::MatrixXd m(a.shape(0), 1);
@@ -214,8 +225,7 @@ T keywordValue(const py::handle& value, const std::string& name, const char* exp
   try {
     return value.cast<T>();
   } catch (const py::cast_error&) {
-    throw py::type_error(name + " must be " + expected + ", got " +
-                         textOf(py::type::of(value)));
+    throw py::type_error(name + " must be " + expected + ", got " + textOf(py::type::of(value)));
   }
 }
 

@@ -42,7 +42,9 @@ ImageArgument imageFromArray(const py::handle& array, const std::string& name);
 py::array arrayFromImage(Image&& image, SampleType type, bool planar);
 
 /// str(object) of a Python object, for messages.
-inline std::string textOf(py::handle object) { return py::str(object).cast<std::string>(); }
+inline std::string textOf(py::handle object) {
+  return py::str(object).cast<std::string>();
+}
 
 /// The sample type named by an app's `dtype=` keyword (None: `fallback`).
 SampleType sampleTypeFrom(const py::object& dtype, SampleType fallback);
@@ -68,8 +70,7 @@ using MeshHandle = std::shared_ptr<const TexturedMesh>;
 /// The domain an app runs on: `target` if it is a TexelDomain (checked against width x height),
 /// else a new one built from the Mesh `target` with `options` (GIL released while building).
 std::shared_ptr<TexelDomain> domainFor(const py::handle& target, int width, int height,
-                                       const OperatorOptions& options,
-                                       const py::object& progress);
+                                       const OperatorOptions& options, const py::object& progress);
 
 /// Geodesic sources from the keyword lists source_vertices, source_uvs, source_points; vertex
 /// indices are checked against `vertexCount`.

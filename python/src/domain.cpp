@@ -39,8 +39,8 @@ std::shared_ptr<TexelDomain> buildDomain(const TexturedMesh& mesh, int width, in
 /// A per-texel grid array over the image (H x W, row 0 = top) from a per-grid-texel vector.
 template <typename T, typename Source>
 py::array_t<T> imageGridArray(const TexelGrid& grid, const std::vector<Source>& values, T outside) {
-  py::array_t<T> out({static_cast<py::ssize_t>(grid.imageHeight),
-                      static_cast<py::ssize_t>(grid.imageWidth)});
+  py::array_t<T> out(
+      {static_cast<py::ssize_t>(grid.imageHeight), static_cast<py::ssize_t>(grid.imageWidth)});
   auto view = out.template mutable_unchecked<2>();
   for (int j = 0; j < grid.imageHeight; ++j)
     for (int i = 0; i < grid.imageWidth; ++i) {
@@ -85,8 +85,7 @@ void copyInto(const py::handle& target, const Image& source, SampleType type) {
 }  // namespace
 
 std::shared_ptr<TexelDomain> domainFor(const py::handle& target, int width, int height,
-                                       const OperatorOptions& options,
-                                       const py::object& progress) {
+                                       const OperatorOptions& options, const py::object& progress) {
   if (py::isinstance<TexelDomain>(target)) {
     auto domain = target.cast<std::shared_ptr<TexelDomain>>();
     if (domain->grid().imageWidth != width || domain->grid().imageHeight != height)
@@ -196,7 +195,8 @@ void registerDomain(py::module_& m) {
            [](const TexelDomain& d) {
              return csrTuple(Eigen::SparseMatrix<double>(d.operators().stiffness()));
            })
-      .def("_differential", [](const TexelDomain& d) { return csrTuple(d.operators().differential()); })
+      .def("_differential",
+           [](const TexelDomain& d) { return csrTuple(d.operators().differential()); })
       .def("_hodge_star1",
            [](const TexelDomain& d) {
              py::gil_scoped_release release;

@@ -23,23 +23,26 @@ py::object newException(py::module_& m, const char* name, const char* doc, py::h
 void registerErrors(py::module_& m) {
   // Kept alive by the module attributes; the translator runs while the module is loaded.
   static py::handle invalidInput, io, numerical, unsupported, cancelled;
-  invalidInput = newException(m, "InvalidInputError",
-                              "Bad input (array shape, value, option); a ValueError.",
-                              PyExc_ValueError).release();
-  io = newException(m, "IoError", "A file could not be read or written; an OSError.",
-                    PyExc_OSError).release();
+  invalidInput =
+      newException(m, "InvalidInputError", "Bad input (array shape, value, option); a ValueError.",
+                   PyExc_ValueError)
+          .release();
+  io = newException(m, "IoError", "A file could not be read or written; an OSError.", PyExc_OSError)
+           .release();
   numerical = newException(m, "NumericalError",
                            "A numerical step failed (e.g. a factorisation); a RuntimeError.",
-                           PyExc_RuntimeError).release();
+                           PyExc_RuntimeError)
+                  .release();
   // Valid input that uses a feature texgrad does not handle: both a ValueError (the input is
   // refused) and a NotImplementedError.
-  const py::tuple unsupportedBases = py::make_tuple(py::handle(PyExc_ValueError),
-                                                    py::handle(PyExc_NotImplementedError));
+  const py::tuple unsupportedBases =
+      py::make_tuple(py::handle(PyExc_ValueError), py::handle(PyExc_NotImplementedError));
   unsupported = newException(m, "UnsupportedError",
                              "Input texgrad does not handle; a ValueError and NotImplementedError.",
-                             unsupportedBases).release();
-  cancelled = newException(m, "Cancelled", "A progress callback returned False.",
-                           PyExc_Exception).release();
+                             unsupportedBases)
+                    .release();
+  cancelled = newException(m, "Cancelled", "A progress callback returned False.", PyExc_Exception)
+                  .release();
   py::register_exception_translator([](std::exception_ptr error) {
     try {
       if (error) std::rethrow_exception(error);

@@ -51,8 +51,8 @@ std::vector<double> betaCells(const TexelDomain& domain, const py::object& betaM
 std::unique_ptr<PyInteractiveFilter> makeFilter(const py::handle& domainObject,
                                                 const py::handle& texture, double alpha,
                                                 double beta, const py::object& betaMap,
-                                                std::pair<double, double> betaRange,
-                                                bool normalMap, const py::kwargs& solver) {
+                                                std::pair<double, double> betaRange, bool normalMap,
+                                                const py::kwargs& solver) {
   auto result = std::make_unique<PyInteractiveFilter>();
   result->domain = requireDomain(domainObject);
   FilterOptions options;
@@ -105,8 +105,8 @@ void registerInteractive(py::module_& m) {
       "The filter as a stateful solver (a notebook slider, a brush): set_parameters redoes only "
       "the numeric update, step() one V-cycle (or an exact solve with solver='direct').")
       .def(py::init(&makeFilter), arg("domain"), arg("image"), py::kw_only(), arg("alpha") = 1e4,
-           arg("beta") = 1.0, arg("beta_map") = py::none(),
-           arg("beta_range") = std::pair(0.0, 2.0), arg("normal_map") = false,
+           arg("beta") = 1.0, arg("beta_map") = py::none(), arg("beta_range") = std::pair(0.0, 2.0),
+           arg("normal_map") = false,
            "Sets up the solver for `image` (H x W x C, the domain's size) on a TexelDomain built "
            "with keep_piece_integrals=True if beta maps will be used. Solver keywords as "
            "texgrad.filter's.")
@@ -172,8 +172,7 @@ void registerInteractive(py::module_& m) {
             self.solver->setSources(sources);
           },
           py::kw_only(), arg("source_vertices") = py::none(), arg("source_uvs") = py::none(),
-          arg("source_points") = py::none(),
-          "Replaces the sources and resets the iterates.")
+          arg("source_points") = py::none(), "Replaces the sources and resets the iterates.")
       .def(
           "set_alpha",
           [](PyGeodesicSolver& self, double alpha) {
@@ -195,8 +194,9 @@ void registerInteractive(py::module_& m) {
             self.solver->solve();
           },
           "Full solves of both systems.")
-      .def("residual", [](const PyGeodesicSolver& self) { return self.solver->residual(); },
-           "Largest relative residual of the current heat and distance iterates.")
+      .def(
+          "residual", [](const PyGeodesicSolver& self) { return self.solver->residual(); },
+          "Largest relative residual of the current heat and distance iterates.")
       .def_property_readonly(
           "heat_settled", [](const PyGeodesicSolver& self) { return self.solver->heatSettled(); })
       .def_property_readonly(
@@ -209,8 +209,7 @@ void registerInteractive(py::module_& m) {
           "distance_image",
           [](const PyGeodesicSolver& self, bool pad) {
             const TexelDomain& domain = *self.domain;
-            Image image(domain.grid().imageWidth, domain.grid().imageHeight, 1,
-                        PixelFormat::Float);
+            Image image(domain.grid().imageWidth, domain.grid().imageHeight, 1, PixelFormat::Float);
             scatterTexels(domain.grid(), self.solver->distances(), image);
             if (pad) image = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), image);
             return arrayFromImage(std::move(image), SampleType::Float32, true);

@@ -29,13 +29,12 @@ std::vector<Triangle> trianglesFromArray(const py::handle& handle, const std::st
     throw py::type_error(name + " must be an m x 3 integer array");
   }
   if (raw.dtype().kind() != 'i' && raw.dtype().kind() != 'u')
-    throw py::type_error(name + " must hold integers, got dtype " +
-                         textOf(raw.dtype()));
+    throw py::type_error(name + " must hold integers, got dtype " + textOf(raw.dtype()));
   const auto a = py::array_t<int64_t, py::array::forcecast>::ensure(raw);
   if (a.ndim() != 2 || a.shape(1) != 3 || a.shape(0) == 0)
     throw InvalidInputError(name + " must be a non-empty m x 3 array of corner indices, got " +
-                            std::to_string(a.ndim()) + "-D shape with " +
-                            std::to_string(a.size()) + " entries");
+                            std::to_string(a.ndim()) + "-D shape with " + std::to_string(a.size()) +
+                            " entries");
   std::vector<Triangle> triangles(static_cast<size_t>(a.shape(0)));
   const auto view = a.unchecked<2>();
   for (py::ssize_t f = 0; f < a.shape(0); ++f)
@@ -54,8 +53,9 @@ std::shared_ptr<TexturedMesh> meshFromArrays(const py::handle& vertices, const p
                                              const py::handle& uvs, const py::handle& uvFaces,
                                              double weldTolerance) {
   if (uvs.is_none())
-    throw InvalidInputError("uvs is None: texgrad needs texture coordinates (a mesh without UVs "
-                            "has no atlas)");
+    throw InvalidInputError(
+        "uvs is None: texgrad needs texture coordinates (a mesh without UVs "
+        "has no atlas)");
   const Eigen::MatrixXd p = matrixFromArray(vertices, "vertices", 3);
   const Eigen::MatrixXd t = matrixFromArray(uvs, "uvs", 2);
   if (p.rows() == 0) throw InvalidInputError("vertices is empty");
@@ -153,9 +153,8 @@ py::dict atlasReport(const TexturedMesh& mesh, const py::object& resolution) {
       size = resolution.cast<std::pair<int, int>>();
     }
     if (size->first < 1 || size->second < 1)
-      throw InvalidInputError("resolution must be positive, got " +
-                              std::to_string(size->first) + " x " +
-                              std::to_string(size->second));
+      throw InvalidInputError("resolution must be positive, got " + std::to_string(size->first) +
+                              " x " + std::to_string(size->second));
   }
   AtlasReport report;
   {
@@ -170,20 +169,26 @@ py::dict atlasReport(const TexturedMesh& mesh, const py::object& resolution) {
 
 PixelFormat formatOf(SampleType type) {
   switch (type) {
-    case SampleType::UInt8: return PixelFormat::UInt8;
-    case SampleType::UInt16: return PixelFormat::UInt16;
+    case SampleType::UInt8:
+      return PixelFormat::UInt8;
+    case SampleType::UInt16:
+      return PixelFormat::UInt16;
     case SampleType::Float32:
-    case SampleType::Float64: break;
+    case SampleType::Float64:
+      break;
   }
   return PixelFormat::Float;
 }
 
 SampleType sampleTypeOf(PixelFormat format) {
   switch (format) {
-    case PixelFormat::UInt8: return SampleType::UInt8;
-    case PixelFormat::UInt16: return SampleType::UInt16;
+    case PixelFormat::UInt8:
+      return SampleType::UInt8;
+    case PixelFormat::UInt16:
+      return SampleType::UInt16;
     case PixelFormat::Half:
-    case PixelFormat::Float: break;
+    case PixelFormat::Float:
+      break;
   }
   return SampleType::Float32;
 }
