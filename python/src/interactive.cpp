@@ -3,6 +3,7 @@
 #include <pybind11/stl.h>
 
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,9 @@ std::shared_ptr<TexelDomain> requireDomain(const py::handle& domain) {
 
 /// InteractiveFilter with the domain it refers to and the input's array layout.
 struct PyInteractiveFilter {
+  /// Held by every method while it uses the solver, taken after releasing the GIL (so a holder
+  /// never waits for the GIL): calls from several Python threads take turns instead of racing.
+  std::mutex busy;
   std::shared_ptr<TexelDomain> domain;
   std::unique_ptr<InteractiveFilter> filter;
   SampleType sampleType = SampleType::Float32;
@@ -75,6 +79,7 @@ std::unique_ptr<PyInteractiveFilter> makeFilter(const py::handle& domainObject,
 
 /// GeodesicSolver with the domain it refers to.
 struct PyGeodesicSolver {
+  std::mutex busy;  ///< as PyInteractiveFilter::busy
   std::shared_ptr<TexelDomain> domain;
   std::unique_ptr<GeodesicSolver> solver;
 };
@@ -116,6 +121,7 @@ void registerInteractive(py::module_& m) {
              std::pair<double, double> betaRange) {
             std::vector<double> cells = betaCells(*self.domain, betaMap, betaRange);
             py::gil_scoped_release release;
+            const std::lock_guard lock(self.busy);
             self.filter->setParameters(alpha, beta, std::move(cells));
           },
           arg("alpha"), arg("beta"), arg("beta_map") = py::none(),
@@ -127,6 +133,7 @@ void registerInteractive(py::module_& m) {
             SolveReport report;
             {
               py::gil_scoped_release release;
+              const std::lock_guard lock(self.busy);
               report = self.filter->step();
             }
             return reportDict(report);
@@ -138,6 +145,7 @@ void registerInteractive(py::module_& m) {
             SolveReport report;
             {
               py::gil_scoped_release release;
+              const std::lock_guard lock(self.busy);
               report = self.filter->solve();
             }
             return reportDict(report);
@@ -145,8 +153,13 @@ void registerInteractive(py::module_& m) {
           "The configured number of cycles (or the direct solve); returns its report.")
       .def(
           "image",
-          [](const PyInteractiveFilter& self, const py::object& dtype) {
-            Image image = self.filter->image();
+          [](PyInteractiveFilter& self, const py::object& dtype) {
+            Image image;
+            {
+              py::gil_scoped_release release;
+              const std::lock_guard lock(self.busy);
+              image = self.filter->image();
+            }
             return arrayFromImage(std::move(image), sampleTypeFrom(dtype, self.sampleType),
                                   self.planar);
           },
@@ -169,6 +182,7 @@ void registerInteractive(py::module_& m) {
             const std::vector<GeodesicSource> sources =
                 geodesicSourcesFrom(vertices, uvs, points, self.domain->mesh().positions.size());
             py::gil_scoped_release release;
+            const std::lock_guard lock(self.busy);
             self.solver->setSources(sources);
           },
           py::kw_only(), arg("source_vertices") = py::none(), arg("source_uvs") = py::none(),
@@ -177,6 +191,7 @@ void registerInteractive(py::module_& m) {
           "set_alpha",
           [](PyGeodesicSolver& self, double alpha) {
             py::gil_scoped_release release;
+            const std::lock_guard lock(self.busy);
             self.solver->setAlpha(alpha);
           },
           arg("alpha"), "New screening weight: numeric update only; keeps the sources.")
@@ -184,6 +199,7 @@ void registerInteractive(py::module_& m) {
           "update",
           [](PyGeodesicSolver& self) {
             py::gil_scoped_release release;
+            const std::lock_guard lock(self.busy);
             self.solver->update();
           },
           "One refinement (one V-cycle per system, or exact solves with solver='direct').")
@@ -191,27 +207,47 @@ void registerInteractive(py::module_& m) {
           "solve",
           [](PyGeodesicSolver& self) {
             py::gil_scoped_release release;
+            const std::lock_guard lock(self.busy);
             self.solver->solve();
           },
           "Full solves of both systems.")
       .def(
-          "residual", [](const PyGeodesicSolver& self) { return self.solver->residual(); },
+          "residual",
+          [](PyGeodesicSolver& self) {
+            py::gil_scoped_release release;
+            const std::lock_guard lock(self.busy);
+            return self.solver->residual();
+          },
           "Largest relative residual of the current heat and distance iterates.")
-      .def_property_readonly(
-          "heat_settled", [](const PyGeodesicSolver& self) { return self.solver->heatSettled(); })
+      .def_property_readonly("heat_settled",
+                             [](PyGeodesicSolver& self) {
+                               py::gil_scoped_release release;
+                               const std::lock_guard lock(self.busy);
+                               return self.solver->heatSettled();
+                             })
       .def_property_readonly(
           "distances",
-          [](const PyGeodesicSolver& self) {
-            return arrayFromMatrix(self.solver->distances()).attr("reshape")(-1);
+          [](PyGeodesicSolver& self) {
+            Eigen::MatrixXd distances;
+            {
+              py::gil_scoped_release release;
+              const std::lock_guard lock(self.busy);
+              distances = self.solver->distances();
+            }
+            return arrayFromMatrix(distances).attr("reshape")(-1);
           },
           "Current distance per unknown (model units; inf where no source reaches).")
       .def(
           "distance_image",
-          [](const PyGeodesicSolver& self, bool pad) {
+          [](PyGeodesicSolver& self, bool pad) {
             const TexelDomain& domain = *self.domain;
             Image image(domain.grid().imageWidth, domain.grid().imageHeight, 1, PixelFormat::Float);
-            scatterTexels(domain.grid(), self.solver->distances(), image);
-            if (pad) image = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), image);
+            {
+              py::gil_scoped_release release;
+              const std::lock_guard lock(self.busy);
+              scatterTexels(domain.grid(), self.solver->distances(), image);
+              if (pad) image = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), image);
+            }
             return arrayFromImage(std::move(image), SampleType::Float32, true);
           },
           py::kw_only(), arg("dilate") = true,

@@ -1,6 +1,7 @@
 """What users rely on: bad input raises a Python exception naming the argument (never a crash),
 any dtype and memory order, progress callbacks, Ctrl-C, and the GIL released during solves."""
 
+import io
 import os
 import signal
 import threading
@@ -234,3 +235,29 @@ def test_the_gil_is_released_during_a_solve(spot_domain, spot_texture_file):
     during = [t for t in ticks if start < t < end]
     # A thread holding the GIL for the whole solve would let the counter tick at most once.
     assert len(during) >= 0.2 * (end - start) / 0.001 / 10
+
+
+def test_tqdm_callback_drives_a_bar(spot_mesh):
+    tqdm = pytest.importorskip("tqdm")
+    with tqdm.tqdm(total=100, file=io.StringIO()) as bar:
+        texgrad.react(spot_mesh, 64, steps=10, progress=texgrad.tqdm_callback(bar))
+        assert bar.n == pytest.approx(100)
+        assert bar.desc.startswith("react")
+
+
+def test_solver_calls_from_several_threads_take_turns(spot_domain):
+    solver = texgrad.GeodesicSolver(spot_domain, interactive=True)
+    solver.set_sources(source_vertices=[100])
+    reference = texgrad.GeodesicSolver(spot_domain, interactive=True)
+    reference.set_sources(source_vertices=[100])
+    for _ in range(8):
+        reference.update()
+    threads = [threading.Thread(target=lambda: [solver.update() for _ in range(2)])
+               for _ in range(4)]
+    for thread in threads:
+        thread.start()
+    for _ in range(20):
+        assert np.isfinite(solver.residual())  # reads while the others update
+    for thread in threads:
+        thread.join()
+    assert np.array_equal(solver.distances, reference.distances)

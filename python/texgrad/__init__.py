@@ -45,6 +45,18 @@ def _matrix(parts):
     return _sparse.csr_matrix((data, indices, indptr), shape=shape)
 
 
+def tqdm_callback(bar):
+    """A ``progress=`` callable that drives a tqdm bar: its description is the stage, its
+    position the stage's fraction of ``bar.total`` (e.g. ``tqdm(total=100)``; 1 when None)."""
+
+    def update(stage, fraction):
+        if getattr(bar, "desc", None) != stage:
+            bar.set_description(stage, refresh=False)
+        bar.update(fraction * (bar.total or 1) - bar.n)
+
+    return update
+
+
 class TexelDomain(_NativeTexelDomain):
     """A mesh's atlas, texel grid and operators at one resolution (n unknowns = active texels).
 
@@ -99,5 +111,6 @@ __all__ = [
     "read_mesh",
     "seams",
     "stitch",
+    "tqdm_callback",
     "write_image",
 ]
