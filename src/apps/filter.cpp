@@ -4,6 +4,7 @@
 #include "texgrad/apps/filter.h"
 
 #include <cmath>
+#include <utility>
 
 #include "texgrad/apps/normal_map.h"
 #include "texgrad/apps/texel_signal.h"
@@ -22,7 +23,7 @@ void FilterOptions::validate() const {
 }
 
 InteractiveFilter::InteractiveFilter(const TexelDomain& domain, const Image& texture,
-                                     const FilterOptions& options)
+                                     const FilterOptions& options, const ProgressCallback& progress)
     : domain_(domain),
       input_(texture),
       working_(options.normalMap ? decodeNormalMap(texture) : texture),
@@ -33,10 +34,15 @@ InteractiveFilter::InteractiveFilter(const TexelDomain& domain, const Image& tex
   x_ = x0_;
   symmetricProduct(domain.operators().mass(), x0_, massX0_);
   symmetricProduct(domain.operators().stiffness(), x0_, stiffnessX0_);
-  setParameters(options.alpha, options.beta, options.betaPerCell);
+  applyParameters(options.alpha, options.beta, options.betaPerCell, progress);
 }
 
 void InteractiveFilter::setParameters(double alpha, double beta, std::vector<double> betaPerCell) {
+  applyParameters(alpha, beta, std::move(betaPerCell), {});
+}
+
+void InteractiveFilter::applyParameters(double alpha, double beta, std::vector<double> betaPerCell,
+                                        const ProgressCallback& progress) {
   if (!(alpha > 0.0) || !std::isfinite(alpha))
     throw InvalidInputError("alpha must be a positive number, got " + std::to_string(alpha));
   const TexelOperators& ops = domain_.operators();
@@ -58,17 +64,17 @@ void InteractiveFilter::setParameters(double alpha, double beta, std::vector<dou
   alpha_ = alpha;
   // alpha M + S (+ alpha lambda C, paper §4.2); the pattern is the same for every alpha.
   if (first)
-    solver_.initAndUpdate(ops.screenedSystem(alpha));
+    solver_.initAndUpdate(ops.screenedSystem(alpha), progress);
   else
-    solver_.update(ops.screenedSystem(alpha));
+    solver_.update(ops.screenedSystem(alpha), progress);
 }
 
-SolveReport InteractiveFilter::step() {
-  return solver_.step(rhs_, x_);
+SolveReport InteractiveFilter::step(const ProgressCallback& progress) {
+  return solver_.step(rhs_, x_, progress);
 }
 
-SolveReport InteractiveFilter::solve() {
-  return solver_.solve(rhs_, x_);
+SolveReport InteractiveFilter::solve(const ProgressCallback& progress) {
+  return solver_.solve(rhs_, x_, progress);
 }
 
 Image InteractiveFilter::image() const {
@@ -91,10 +97,10 @@ Image InteractiveFilter::image() const {
 }
 
 FilterResult filterTexture(const TexelDomain& domain, const Image& texture,
-                           const FilterOptions& options) {
-  InteractiveFilter filter(domain, texture, options);
+                           const FilterOptions& options, const ProgressCallback& progress) {
+  InteractiveFilter filter(domain, texture, options, progress);
   FilterResult result;
-  result.report = filter.solve();
+  result.report = filter.solve(progress);
   result.image = filter.image();
   result.initSeconds = filter.initSeconds();
   result.updateSeconds = filter.updateSeconds();
