@@ -91,8 +91,8 @@ py::array filter(const py::handle& target, const py::handle& texture, double alp
   if (map)
     options.betaPerCell =
         cellValuesFromMap(domain->grid(), map->image, betaRange.first, betaRange.second);
-  Image output = withProgress(progress, [&](const ProgressCallback&) {
-    Image result = filterTexture(*domain, input.image, options).image;
+  Image output = withProgress(progress, [&](const ProgressCallback& callback) {
+    Image result = filterTexture(*domain, input.image, options, callback).image;
     input.image = Image();  // the input's copy goes before the output array is made
     return result;
   });
@@ -141,9 +141,10 @@ py::array stitch(const py::handle& target, const py::object& composite, const py
   }
   if (!lock.is_none()) options.lock = imageFromArray(lock, "lock").image;
   const auto domain = domainFor(target, first.image.width, first.image.height, {}, progress);
-  Image output = withProgress(progress, [&](const ProgressCallback&) {
-    return compositeMode ? stitchComposite(*domain, first.image, segmentImage, options).image
-                         : stitchPartials(*domain, partialImages, confidenceImages, options).image;
+  Image output = withProgress(progress, [&](const ProgressCallback& callback) {
+    return compositeMode
+               ? stitchComposite(*domain, first.image, segmentImage, options, callback).image
+               : stitchPartials(*domain, partialImages, confidenceImages, options, callback).image;
   });
   return arrayFromImage(std::move(output), sampleTypeFrom(dtype, first.sampleType), first.planar);
 }
@@ -154,8 +155,8 @@ py::array seams(const py::handle& target, const py::handle& texture, const py::o
   const Image maskImage = mask.is_none() ? Image() : imageFromArray(mask, "mask").image;
   const auto domain = domainFor(target, input.image.width, input.image.height,
                                 OperatorOptions::assembledOnce(), progress);
-  Image output = withProgress(progress, [&](const ProgressCallback&) {
-    return smoothSeams(*domain, input.image, maskImage).image;
+  Image output = withProgress(progress, [&](const ProgressCallback& callback) {
+    return smoothSeams(*domain, input.image, maskImage, callback).image;
   });
   return arrayFromImage(std::move(output), sampleTypeFrom(dtype, input.sampleType), input.planar);
 }
@@ -290,7 +291,7 @@ py::object geodesic(const py::handle& target, const py::object& sourceVertices,
   const auto domain = domainFor(target, width, height, OperatorOptions::assembledOnce(), progress);
   GeodesicResult result = withProgress(progress, [&](const ProgressCallback& callback) {
     reportProgress(callback, "geodesic", 0.0);
-    GeodesicResult r = geodesicDistance(*domain, sources, options);
+    GeodesicResult r = geodesicDistance(*domain, sources, options, callback);
     reportProgress(callback, "geodesic", 1.0);
     return r;
   });

@@ -56,6 +56,7 @@ std::unique_ptr<PyInteractiveFilter> makeFilter(const py::handle& domainObject,
                                                 const py::handle& texture, double alpha,
                                                 double beta, const py::object& betaMap,
                                                 std::pair<double, double> betaRange, bool normalMap,
+                                                const py::object& progress,
                                                 const py::kwargs& solver) {
   auto result = std::make_unique<PyInteractiveFilter>();
   result->domain = requireDomain(domainObject);
@@ -72,8 +73,9 @@ std::unique_ptr<PyInteractiveFilter> makeFilter(const py::handle& domainObject,
   options.validate();
   result->sampleType = input.sampleType;
   result->planar = input.planar;
-  py::gil_scoped_release release;
-  result->filter = std::make_unique<InteractiveFilter>(*result->domain, input.image, options);
+  result->filter = withProgress(progress, [&](const ProgressCallback& callback) {
+    return std::make_unique<InteractiveFilter>(*result->domain, input.image, options, callback);
+  });
   return result;
 }
 
@@ -87,6 +89,7 @@ struct PyGeodesicSolver {
 std::unique_ptr<PyGeodesicSolver> makeGeodesic(const py::handle& domainObject, double alpha,
                                                const std::string& offset,
                                                const std::string& boundary, bool interactive,
+                                               const py::object& progress,
                                                const py::kwargs& solver) {
   auto result = std::make_unique<PyGeodesicSolver>();
   result->domain = requireDomain(domainObject);
@@ -96,8 +99,9 @@ std::unique_ptr<PyGeodesicSolver> makeGeodesic(const py::handle& domainObject, d
   options.boundary = parseGeodesicBoundary(boundary);
   applySolverKeywords(solver, options.solver);
   options.validate();
-  py::gil_scoped_release release;
-  result->solver = std::make_unique<GeodesicSolver>(*result->domain, options);
+  result->solver = withProgress(progress, [&](const ProgressCallback& callback) {
+    return std::make_unique<GeodesicSolver>(*result->domain, options, callback);
+  });
   return result;
 }
 
@@ -111,7 +115,7 @@ void registerInteractive(py::module_& m) {
       "the numeric update, step() one V-cycle (or an exact solve with solver='direct').")
       .def(py::init(&makeFilter), arg("domain"), arg("image"), py::kw_only(), arg("alpha") = 1e4,
            arg("beta") = 1.0, arg("beta_map") = py::none(), arg("beta_range") = std::pair(0.0, 2.0),
-           arg("normal_map") = false,
+           arg("normal_map") = false, arg("progress") = py::none(),
            "Sets up the solver for `image` (H x W x C, the domain's size) on a TexelDomain built "
            "with keep_piece_integrals=True if beta maps will be used. Solver keywords as "
            "texgrad.filter's.")
@@ -129,27 +133,27 @@ void registerInteractive(py::module_& m) {
           "New alpha, beta and optional beta map (replaces beta): numeric update only.")
       .def(
           "step",
-          [](PyInteractiveFilter& self) {
-            SolveReport report;
-            {
-              py::gil_scoped_release release;
-              const std::lock_guard lock(self.busy);
-              report = self.filter->step();
-            }
+          [](PyInteractiveFilter& self, const py::object& progress) {
+            const SolveReport report =
+                withProgress(progress, [&](const ProgressCallback& callback) {
+                  const std::lock_guard lock(self.busy);
+                  return self.filter->step(callback);
+                });
             return reportDict(report);
           },
+          py::kw_only(), arg("progress") = py::none(),
           "One V-cycle (or an exact solve) towards the current target; returns its report.")
       .def(
           "solve",
-          [](PyInteractiveFilter& self) {
-            SolveReport report;
-            {
-              py::gil_scoped_release release;
-              const std::lock_guard lock(self.busy);
-              report = self.filter->solve();
-            }
+          [](PyInteractiveFilter& self, const py::object& progress) {
+            const SolveReport report =
+                withProgress(progress, [&](const ProgressCallback& callback) {
+                  const std::lock_guard lock(self.busy);
+                  return self.filter->solve(callback);
+                });
             return reportDict(report);
           },
+          py::kw_only(), arg("progress") = py::none(),
           "The configured number of cycles (or the direct solve); returns its report.")
       .def(
           "image",
@@ -172,6 +176,7 @@ void registerInteractive(py::module_& m) {
       "update() refines by one cycle per system (cheap, for display), solve() solves fully.")
       .def(py::init(&makeGeodesic), arg("domain"), py::kw_only(), arg("alpha") = 1e3,
            arg("offset") = "near-field", arg("boundary") = "average", arg("interactive") = false,
+           arg("progress") = py::none(),
            "Sets up both systems on a TexelDomain. interactive=True starts from the "
            "frame-by-frame defaults (GeodesicOptions::interactive). Solver keywords as "
            "texgrad.geodesic's.")
@@ -205,12 +210,13 @@ void registerInteractive(py::module_& m) {
           "One refinement (one V-cycle per system, or exact solves with solver='direct').")
       .def(
           "solve",
-          [](PyGeodesicSolver& self) {
-            py::gil_scoped_release release;
-            const std::lock_guard lock(self.busy);
-            self.solver->solve();
+          [](PyGeodesicSolver& self, const py::object& progress) {
+            withProgress(progress, [&](const ProgressCallback& callback) {
+              const std::lock_guard lock(self.busy);
+              self.solver->solve(callback);
+            });
           },
-          "Full solves of both systems.")
+          py::kw_only(), arg("progress") = py::none(), "Full solves of both systems.")
       .def(
           "residual",
           [](PyGeodesicSolver& self) {

@@ -201,18 +201,52 @@ def interrupt_after(seconds):
     return thread
 
 
-def test_ctrl_c_interrupts_a_long_solve_within_a_second(spot_mesh):
-    domain = texgrad.TexelDomain(spot_mesh, 128, 128)
-    # 3000 reaction-diffusion steps take about 45 s here; the signal comes after 0.5 s.
+@pytest.mark.parametrize("app", ["filter", "geodesic", "react"])
+def test_ctrl_c_interrupts_a_long_solve_within_a_second(spot_domain, app):
+    image = np.random.default_rng(1).random((SIZE, SIZE, 3), dtype=np.float32)
+    # Each call would run for minutes (10^5 V-cycles with no tolerance to stop at, about 15 ms
+    # each; 10^5 time steps); SIGINT comes after 0.5 s.
+    long_calls = {
+        "filter": lambda: texgrad.filter(spot_domain, image, beta=0.5, solver="multigrid",
+                                         cycles=100000, tolerance=0.0),
+        "geodesic": lambda: texgrad.geodesic(spot_domain, source_vertices=[0],
+                                             solver="multigrid", cycles=100000, tolerance=0.0),
+        "react": lambda: texgrad.react(spot_domain, steps=100000),
+    }
     thread = interrupt_after(0.5)
     start = time.monotonic()
     with pytest.raises(KeyboardInterrupt):
-        texgrad.react(domain, steps=3000)
+        long_calls[app]()
     elapsed = time.monotonic() - start
     thread.join()
     assert elapsed < 0.5 + 1.0
-    # The module stays usable: the same domain solves again.
-    assert texgrad.react(domain, steps=2).shape == (128, 128)
+    # The module stays usable: the same domain solves again, as a fresh solve does.
+    again = texgrad.filter(spot_domain, image, beta=0.5, solver="direct")
+    assert np.array_equal(again, texgrad.filter(spot_domain, image, beta=0.5, solver="direct"))
+
+
+def test_interactive_solvers_take_progress_and_ctrl_c(spot_domain, spot_texture_file):
+    image = texgrad.read_image(spot_texture_file, dtype=np.float32)
+    stages = []
+    interactive = texgrad.InteractiveFilter(
+        spot_domain, image, beta=0.0, solver="multigrid", cycles=100000, tolerance=0.0,
+        progress=lambda stage, fraction: stages.append(stage))
+    assert "solver setup" in stages
+    thread = interrupt_after(0.5)
+    with pytest.raises(KeyboardInterrupt):
+        interactive.solve()
+    thread.join()
+    # Still usable after the interrupt: 0.5 s of cycles converged, and a few more steps give what
+    # a fresh direct filter gives.
+    for _ in range(3):
+        interactive.step()
+    fresh = texgrad.filter(spot_domain, image, beta=0.0, solver="direct")
+    assert np.abs(interactive.image() - fresh).max() < 1e-5
+    solver = texgrad.GeodesicSolver(spot_domain, progress=lambda stage, fraction: None)
+    solver.set_sources(source_vertices=[100])
+    seen = []
+    solver.solve(progress=lambda stage, fraction: seen.append(stage))
+    assert "heat solve" in seen and "distance solve" in seen
 
 
 def test_the_gil_is_released_during_a_solve(spot_domain, spot_texture_file):
@@ -261,3 +295,24 @@ def test_solver_calls_from_several_threads_take_turns(spot_domain):
     for thread in threads:
         thread.join()
     assert np.array_equal(solver.distances, reference.distances)
+
+
+@pytest.mark.parametrize("app", ["filter", "stitch", "seams", "geodesic", "lic"])
+def test_every_solving_app_reports_its_solve(square, app):
+    image = np.random.default_rng(2).random((32, 32, 3), dtype=np.float32)
+    segments = np.zeros((32, 32, 3), np.uint8)
+    segments[:, :16, 0] = 255
+    segments[:, 16:, 1] = 255
+    calls = {
+        "filter": lambda p: texgrad.filter(square, image, beta=0.5, progress=p),
+        "stitch": lambda p: texgrad.stitch(square, composite=image, segments=segments, progress=p),
+        "seams": lambda p: texgrad.seams(square, image, progress=p),
+        "geodesic": lambda p: texgrad.geodesic(square, source_uvs=[0.5, 0.5], resolution=32,
+                                               progress=p),
+        "lic": lambda p: texgrad.lic(square, 32, field=np.array([[1.0, 0.0, 0.0]] * 2),
+                                     progress=p),
+    }
+    seen = []
+    calls[app](lambda stage, fraction: seen.append((stage, fraction)))
+    solves = [f for stage, f in seen if "solve" in stage or "sharpen" in stage]
+    assert solves and solves[-1] == 1.0, seen
