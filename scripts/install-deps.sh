@@ -16,6 +16,10 @@ packages=(
   libboost-dev
   # scripts/fuzz.sh: libFuzzer and the sanitizers' runtimes come with clang; seeds via Python.
   clang-14 libclang-rt-14-dev python3
+  # The Python module (TEXGRAD_BUILD_PYTHON, docs/python.md): headers, pybind11, numpy and scipy
+  # (sparse operators), pytest and tqdm (its tests), matplotlib (examples/python).
+  python3-dev python3-pybind11 python3-numpy python3-scipy python3-pytest python3-tqdm
+  python3-matplotlib
 )
 if [[ "${1:-}" == "--viewer" ]]; then
   # Debian's packages unless the commands are already there (e.g. Node.js from another source,

@@ -3,7 +3,8 @@
 # the fast tests under AddressSanitizer+UBSan, then in Release the solver's fast tests again (its
 # SIMD kernels exist only there), the tests too slow for the sanitizer build (named *Slow*:
 # full-size shared meshes), the malloc tests the sanitizers exclude, and the viewer page's tests,
-# including its end-to-end tests in headless Chromium (CTest ViewerE2E). Before the last tests,
+# including its end-to-end tests in headless Chromium (CTest ViewerE2E), and the Python module's
+# tests and examples (pytest). Before the last tests,
 # scripts/test-consumers.sh builds an outside project against the installed package three ways
 # (find_package, pkg-config, add_subdirectory of a library-only shared build) and scripts/fuzz.sh
 # fuzzes every file reader and the viewer's message parser (libFuzzer, ASan + UBSan).
@@ -29,7 +30,14 @@ ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 
 echo "== release build"
 bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_VIEWER_PAGE=ON \
-  -DTEXGRAD_E2E_TESTS=ON -DTEXGRAD_GLTF_VALIDATOR_TESTS=ON
+  -DTEXGRAD_E2E_TESTS=ON -DTEXGRAD_GLTF_VALIDATOR_TESTS=ON -DTEXGRAD_BUILD_PYTHON=ON
+# The Python module: installed as the README's set-up does (python3 on PATH may be another 3.11,
+# docs/python.md), then its tests and examples with pytest (module from build/release/python).
+echo "== Python module (pytest)"
+bash scripts/install-python.sh build/release
+(cd / && python3 -c "import texgrad; print('python3: import texgrad', texgrad.__version__)")
+TEXGRAD_BUILD_DIR=build/release PYTHONDONTWRITEBYTECODE=1 /usr/bin/python3 -m pytest -q \
+  -p no:cacheprovider python/tests
 echo "== consumers (install, find_package, pkg-config, add_subdirectory)"
 bash scripts/test-consumers.sh build/release
 # Fuzz every reader a user's file reaches (clang-14 libFuzzer, ASan + UBSan) for 45 s a target,

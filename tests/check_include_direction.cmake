@@ -1,6 +1,7 @@
 # Fails when a file of one module includes a header of a module it may not depend on (compiles
 # nothing). Run as: cmake -DSOURCE_DIR=<repo> -P tests/check_include_direction.cmake
-# Scans include/texgrad/<m>/, src/<m>/ and tests/<m>/ (cli/ and tests/cli/ as module cli) for
+# Scans include/texgrad/<m>/, src/<m>/ and tests/<m>/ (cli/ and tests/cli/ as module cli,
+# python/src and python/bench as module python) for
 # #include "texgrad/<other>/..." and #include "<other>/..." (a module's private src/ headers).
 cmake_minimum_required(VERSION 3.22)
 if(NOT SOURCE_DIR)
@@ -9,7 +10,7 @@ endif()
 
 # The allowed direct dependencies (docs/architecture.md); a module may include its own headers
 # and those of every module it reaches through these arrows.
-set(modules core io lattice atlas fem operators solver apps viewer cli)
+set(modules core io lattice atlas fem operators solver apps viewer cli python)
 set(deps_core "")
 set(deps_io core)
 set(deps_lattice core)
@@ -20,6 +21,7 @@ set(deps_solver lattice core)
 set(deps_apps operators solver)
 set(deps_viewer apps)
 set(deps_cli viewer apps)
+set(deps_python apps)  # the Python module (python/src, python/bench): a front end beside cli
 
 # Transitive closure, in the order above (every module's dependencies come before it).
 foreach(m IN LISTS modules)
@@ -46,6 +48,8 @@ foreach(m IN LISTS modules)
   set(dirs include/texgrad/${m} src/${m} tests/${m})
   if(m STREQUAL "cli")
     list(APPEND dirs cli)
+  elseif(m STREQUAL "python")
+    list(APPEND dirs python/src python/bench)
   endif()
   foreach(dir IN LISTS dirs)
     file(GLOB_RECURSE files "${SOURCE_DIR}/${dir}/*.h" "${SOURCE_DIR}/${dir}/*.cpp"

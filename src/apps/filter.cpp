@@ -4,6 +4,7 @@
 #include "texgrad/apps/filter.h"
 
 #include <cmath>
+#include <utility>
 
 #include "texgrad/apps/barely_covered.h"
 #include "texgrad/apps/normal_map.h"
@@ -23,7 +24,7 @@ void FilterOptions::validate() const {
 }
 
 InteractiveFilter::InteractiveFilter(const TexelDomain& domain, const Image& texture,
-                                     const FilterOptions& options)
+                                     const FilterOptions& options, const ProgressCallback& progress)
     : domain_(domain),
       input_(texture),
       // A colour texture is solved on input_ itself: no second whole-image copy (24 bytes per
@@ -37,10 +38,15 @@ InteractiveFilter::InteractiveFilter(const TexelDomain& domain, const Image& tex
   symmetricProduct(domain.operators().mass(), x0_, massX0_);
   symmetricProduct(domain.operators().stiffness(), x0_, stiffnessX0_);
   if (!options.rawSolution) barely_ = barelyCoveredUnknowns(domain);
-  setParameters(options.alpha, options.beta, options.betaPerCell);
+  applyParameters(options.alpha, options.beta, options.betaPerCell, progress);
 }
 
 void InteractiveFilter::setParameters(double alpha, double beta, std::vector<double> betaPerCell) {
+  applyParameters(alpha, beta, std::move(betaPerCell), {});
+}
+
+void InteractiveFilter::applyParameters(double alpha, double beta, std::vector<double> betaPerCell,
+                                        const ProgressCallback& progress) {
   if (!(alpha > 0.0) || !std::isfinite(alpha))
     throw InvalidInputError("alpha must be a positive number, got " + std::to_string(alpha));
   const TexelOperators& ops = domain_.operators();
@@ -62,17 +68,17 @@ void InteractiveFilter::setParameters(double alpha, double beta, std::vector<dou
   alpha_ = alpha;
   // alpha M + S (+ alpha lambda C, paper §4.2); the pattern is the same for every alpha.
   if (first)
-    solver_.initAndUpdate(ops.screenedSystem(alpha));
+    solver_.initAndUpdate(ops.screenedSystem(alpha), progress);
   else
-    solver_.update(ops.screenedSystem(alpha));
+    solver_.update(ops.screenedSystem(alpha), progress);
 }
 
-SolveReport InteractiveFilter::step() {
-  return solver_.step(rhs_, x_);
+SolveReport InteractiveFilter::step(const ProgressCallback& progress) {
+  return solver_.step(rhs_, x_, progress);
 }
 
-SolveReport InteractiveFilter::solve() {
-  return solver_.solve(rhs_, x_);
+SolveReport InteractiveFilter::solve(const ProgressCallback& progress) {
+  return solver_.solve(rhs_, x_, progress);
 }
 
 Image InteractiveFilter::image() const {
@@ -103,10 +109,10 @@ Image InteractiveFilter::image() const {
 }
 
 FilterResult filterTexture(const TexelDomain& domain, const Image& texture,
-                           const FilterOptions& options) {
-  InteractiveFilter filter(domain, texture, options);
+                           const FilterOptions& options, const ProgressCallback& progress) {
+  InteractiveFilter filter(domain, texture, options, progress);
   FilterResult result;
-  result.report = filter.solve();
+  result.report = filter.solve(progress);
   result.image = filter.image();
   result.initSeconds = filter.initSeconds();
   result.updateSeconds = filter.updateSeconds();

@@ -102,12 +102,12 @@ GeodesicOptions GeodesicOptions::interactive() {
 
 /// The solver's state: both systems, the sources and the iterates (see GeodesicSolver).
 struct GeodesicSolver::Impl {
-  Impl(const TexelDomain& domain, const GeodesicOptions& options);
+  Impl(const TexelDomain& domain, const GeodesicOptions& options, const ProgressCallback& progress);
   void setAlpha(double alpha);
   void setSources(std::span<const GeodesicSource> sources);
   void update();
   double residual() const;
-  void solve();
+  void solve(const ProgressCallback& progress);
   const Eigen::MatrixXd& diffused() const { return dirichletSolver_ ? heat_ : u_; }
 
   /// Interior texel near a source with its chord distance (unit-area units), for NearField.
@@ -125,14 +125,14 @@ struct GeodesicSolver::Impl {
   /// no texel inside the image (the output would be all +inf).
   void requireReachInImage(const std::vector<std::vector<fem::TexelWeight>>& weights,
                            const std::vector<ResolvedSource>& sources) const;
-  void buildDirichlet();
-  void updateDirichlet();
+  void buildDirichlet(const ProgressCallback& progress);
+  void updateDirichlet(const ProgressCallback& progress = {});
   /// Per component of A1's support graph: the constant to subtract from y (GeodesicOffset).
   std::vector<double> offsets() const;
   void requireSources() const;
   void resetIterates();
-  void diffusionStep(bool full);
-  void distanceStep(bool full);
+  void diffusionStep(bool full, const ProgressCallback& progress = {});
+  void distanceStep(bool full, const ProgressCallback& progress = {});
 
   const TexelDomain* domain_;
   GeodesicOptions options_;
@@ -160,7 +160,8 @@ struct GeodesicSolver::Impl {
   bool heatChanged_ = true;  ///< u changed since the divergence was last computed
 };
 
-GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& options)
+GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& options,
+                           const ProgressCallback& progress)
     : domain_(&domain),
       options_([&] {
         options.validate();
@@ -175,14 +176,16 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
   scale_ = std::sqrt(area);
   gradients_ = std::make_unique<GeodesicGradients>(domain, options_.solver.multigrid.threads);
   // A1 and A2 live in their solvers only (SystemSolver::matrix()).
-  diffusionSolver_.initAndUpdate(options_.alpha * ops.mass() + ops.stiffness());
+  diffusionSolver_.initAndUpdate(options_.alpha * ops.mass() + ops.stiffness(),
+                                 renameStage(progress, "heat setup"));
   // The cut-cell ghost penalty keeps barely covered texels from amplifying the inconsistency
   // of the normalised gradient (see Gradients::stabiliser).
-  distanceSolver_.initAndUpdate(ops.stiffness() + kDistanceScreening * ops.mass() +
-                                gradients_->stabiliser(domain.unknowns()));
+  distanceSolver_.initAndUpdate(
+      ops.stiffness() + kDistanceScreening * ops.mass() + gradients_->stabiliser(domain.unknowns()),
+      renameStage(progress, "distance setup"));
   labelComponents();
   if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
-    buildDirichlet();
+    buildDirichlet(progress);
   const TexturedMesh& mesh = domain.mesh();
   vertexFaceBegin_.assign(mesh.positions.size() + 1, 0);
   for (const Triangle& t : mesh.triangles)
@@ -200,7 +203,7 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
   timings_.setup = secondsSince(start);
 }
 
-void GeodesicSolver::Impl::buildDirichlet() {
+void GeodesicSolver::Impl::buildDirichlet(const ProgressCallback& progress) {
   const TexelGrid& grid = domain_->grid();
   const fem::TexelBasis& basis = domain_->operators().basis();
   dirichlet_.assign(static_cast<size_t>(domain_->unknowns()), 0);
@@ -225,10 +228,10 @@ void GeodesicSolver::Impl::buildDirichlet() {
   dirichletCount_ = static_cast<int>(std::count(dirichlet_.begin(), dirichlet_.end(), 1));
   dirichletSolver_ = std::make_unique<SystemSolver>(grid, options_.solver);
   dirichletSolver_->init(diffusionSolver_.matrix());
-  updateDirichlet();
+  updateDirichlet(renameStage(progress, "dirichlet heat setup"));
 }
 
-void GeodesicSolver::Impl::updateDirichlet() {
+void GeodesicSolver::Impl::updateDirichlet(const ProgressCallback& progress) {
   // A1 with the rows and columns of held texels reduced to their diagonal: same pattern, SPD.
   Eigen::SparseMatrix<double> a = diffusionSolver_.matrix();
   for (int j = 0; j < a.outerSize(); ++j)
@@ -236,7 +239,7 @@ void GeodesicSolver::Impl::updateDirichlet() {
       if ((dirichlet_[static_cast<size_t>(it.row())] || dirichlet_[static_cast<size_t>(j)]) &&
           it.row() != j)
         it.valueRef() = 0.0;
-  dirichletSolver_->update(std::move(a));
+  dirichletSolver_->update(std::move(a), progress);
 }
 
 void GeodesicSolver::Impl::resetIterates() {
@@ -497,17 +500,19 @@ void GeodesicSolver::Impl::requireSources() const {
     throw InvalidInputError("GeodesicSolver: call setSources before update or solve");
 }
 
-void GeodesicSolver::Impl::diffusionStep(bool full) {
+void GeodesicSolver::Impl::diffusionStep(bool full, const ProgressCallback& progress) {
   const auto start = Clock::now();
   timings_.diffusion = 0.0;
   if (!full && heatSettled_) return;  // u, and so the divergence, stay as they are
-  diffusionReport_ =
-      full ? diffusionSolver_.solve(impulse_, u_) : diffusionSolver_.refine(impulse_, u_, true);
+  diffusionReport_ = full
+                         ? diffusionSolver_.solve(impulse_, u_, renameStage(progress, "heat solve"))
+                         : diffusionSolver_.refine(impulse_, u_, true);
   double residual = lastResidual(diffusionReport_);
   if (dirichletSolver_) {
-    const SolveReport report = full
-                                   ? dirichletSolver_->solve(impulseDirichlet_, uDirichlet_)
-                                   : dirichletSolver_->refine(impulseDirichlet_, uDirichlet_, true);
+    const SolveReport report =
+        full ? dirichletSolver_->solve(impulseDirichlet_, uDirichlet_,
+                                       renameStage(progress, "dirichlet heat solve"))
+             : dirichletSolver_->refine(impulseDirichlet_, uDirichlet_, true);
     residual = std::max(residual, lastResidual(report));
     heat_ = 0.5 * (u_ + uDirichlet_);
   }
@@ -520,7 +525,7 @@ void GeodesicSolver::Impl::diffusionStep(bool full) {
   timings_.diffusion = secondsSince(start);
 }
 
-void GeodesicSolver::Impl::distanceStep(bool full) {
+void GeodesicSolver::Impl::distanceStep(bool full, const ProgressCallback& progress) {
   auto start = Clock::now();
   if (heatChanged_) {
     gradients_->divergence(diffused().data(), divergence_.data(), divergence_.rows());
@@ -528,8 +533,9 @@ void GeodesicSolver::Impl::distanceStep(bool full) {
   }
   timings_.divergence = secondsSince(start);
   start = Clock::now();
-  distanceReport_ = full ? distanceSolver_.solve(divergence_, y_)
-                         : distanceSolver_.refine(divergence_, y_, false);
+  distanceReport_ =
+      full ? distanceSolver_.solve(divergence_, y_, renameStage(progress, "distance solve"))
+           : distanceSolver_.refine(divergence_, y_, false);
   // y moves by its offset every time, so its constant part stays the size of the distances. With
   // float V-cycles (refine), S's float rounding perturbs its null space (the constants) by far
   // more than eps M: a drifting constant in y would leak into the distances.
@@ -561,14 +567,15 @@ double GeodesicSolver::Impl::residual() const {
   return std::max(worst, distanceSolver_.relativeResidual(divergence_, y_));
 }
 
-void GeodesicSolver::Impl::solve() {
+void GeodesicSolver::Impl::solve(const ProgressCallback& progress) {
   requireSources();
-  diffusionStep(true);
-  distanceStep(true);
+  diffusionStep(true, progress);
+  distanceStep(true, progress);
 }
 
-GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options)
-    : impl_(std::make_unique<Impl>(domain, options)) {}
+GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options,
+                               const ProgressCallback& progress)
+    : impl_(std::make_unique<Impl>(domain, options, progress)) {}
 GeodesicSolver::~GeodesicSolver() = default;
 GeodesicSolver::GeodesicSolver(GeodesicSolver&&) noexcept = default;
 GeodesicSolver& GeodesicSolver::operator=(GeodesicSolver&&) noexcept = default;
@@ -591,8 +598,8 @@ bool GeodesicSolver::heatSettled() const {
 double GeodesicSolver::residual() const {
   return impl_->residual();
 }
-void GeodesicSolver::solve() {
-  impl_->solve();
+void GeodesicSolver::solve(const ProgressCallback& progress) {
+  impl_->solve(progress);
 }
 const Eigen::VectorXd& GeodesicSolver::distances() const {
   return impl_->distances_;
@@ -626,10 +633,10 @@ const GeodesicOptions& GeodesicSolver::options() const {
 }
 
 GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,
-                                const GeodesicOptions& options) {
-  GeodesicSolver solver(domain, options);
+                                const GeodesicOptions& options, const ProgressCallback& progress) {
+  GeodesicSolver solver(domain, options, progress);
   solver.setSources(sources);
-  solver.solve();
+  solver.solve(progress);
   GeodesicResult result;
   result.distances = solver.distances();
   result.sources = solver.sources();

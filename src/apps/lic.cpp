@@ -228,7 +228,8 @@ LineIntegralConvolution::LineIntegralConvolution(const TexelDomain& domain,
 
 LineIntegralConvolution::~LineIntegralConvolution() = default;
 
-Eigen::MatrixXd LineIntegralConvolution::convolve(const Eigen::MatrixXd& noise, LicReport* report) {
+Eigen::MatrixXd LineIntegralConvolution::convolve(const Eigen::MatrixXd& noise, LicReport* report,
+                                                  const ProgressCallback& progress) {
   Impl& s = *impl_;
   if (noise.rows() != s.domain.unknowns())
     throw InvalidInputError("LIC noise has " + std::to_string(noise.rows()) +
@@ -238,12 +239,12 @@ Eigen::MatrixXd LineIntegralConvolution::convolve(const Eigen::MatrixXd& noise, 
   const Eigen::MatrixXd b = s.options.alpha * (s.massH * noise);
   // Start from the noise's mean (S_h kills constants): residual below that of x = 0 or x = noise.
   Eigen::MatrixXd x = noise.colwise().mean().replicate(noise.rows(), 1);
-  local.diffusion = s.diffusion.solve(b, x);
+  local.diffusion = s.diffusion.solve(b, x, progress);
   if (s.sharpens()) {
     const Eigen::MatrixXd rhs =
         s.options.sharpenAlpha * (s.mass * x) + s.options.sharpenBeta * (s.stiffness * x);
     Eigen::MatrixXd y = x;
-    local.sharpening = s.sharpening->solve(rhs, y);
+    local.sharpening = s.sharpening->solve(rhs, y, renameStage(progress, "sharpen solve"));
     x = std::move(y);
   }
   if (report) *report = std::move(local);
@@ -282,11 +283,17 @@ LicResult lineIntegralConvolution(const TexelDomain& domain,
   reportProgress(progress, "lic setup", 0.0);
   LineIntegralConvolution lic(domain, fieldTexel, options);
   reportProgress(progress, "lic setup", 1.0);
-  reportProgress(progress, "lic solve", 0.0);
+  // convolve's stages "solve" and "sharpen solve" under this function's names.
+  ProgressCallback solves;
+  if (progress)
+    solves = [&progress](const Progress& p) {
+      Progress named = p;
+      named.stage = p.stage == "solve" ? "lic solve" : "lic sharpen";
+      return progress(named);
+    };
   LicResult result;
   result.values =
-      lic.convolve(licNoise(domain.grid(), options.channels, options.seed), &result.report);
-  reportProgress(progress, "lic solve", 1.0);
+      lic.convolve(licNoise(domain.grid(), options.channels, options.seed), &result.report, solves);
   const TexelGrid& grid = domain.grid();
   result.image = Image(grid.imageWidth, grid.imageHeight, options.channels, PixelFormat::UInt8);
   const Eigen::VectorXd area = domain.operators().mass() * Eigen::VectorXd::Ones(domain.unknowns());

@@ -25,8 +25,6 @@ constexpr double kSeedUDrop = 0.5;
 constexpr double kSeedV = 0.25;
 /// Width of a seed spot's fall-off ring, relative to its radius.
 constexpr double kSeedFalloff = 0.5;
-/// Progress reports per run.
-constexpr int kProgressReports = 100;
 /// Texels with M_tt below this fraction of the mean diagonal get a pinning term (see
 /// pinNegligibleTexels); real atlases have boundary texels down to 1e-17 of the mean.
 constexpr double kNegligibleMass = 1e-10;
@@ -244,12 +242,11 @@ void ReactionDiffusion::step() {
 
 void ReactionDiffusion::run(int steps, const ProgressCallback& progress) {
   if (steps < 0) throw InvalidInputError("steps must be >= 0, got " + std::to_string(steps));
-  const int every = std::max(1, steps / kProgressReports);
-  reportProgress(progress, "react", 0.0);
+  // Every step polls, so a cancel lands within one step; front ends choose how often to draw.
+  reportProgress(progress, Progress{"react", 0.0, 0, steps});
   for (int i = 0; i < steps; ++i) {
     step();
-    if ((i + 1) % every == 0 || i + 1 == steps)
-      reportProgress(progress, "react", static_cast<double>(i + 1) / steps);
+    reportProgress(progress, Progress{"react", static_cast<double>(i + 1) / steps, i + 1, steps});
   }
 }
 

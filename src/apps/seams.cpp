@@ -94,7 +94,7 @@ int64_t dropUnanchored(const SparseViewd& s, std::vector<uint8_t>& candidate) {
 }  // namespace
 
 SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const Image& mask,
-                        const SeamsOptions& options) {
+                        const SeamsOptions& options, const ProgressCallback& progress) {
   const TexelGrid& grid = domain.grid();
   const TexelOperators& ops = domain.operators();
   const SparseMatrixd& m = ops.mass();
@@ -137,7 +137,9 @@ SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const I
   }
   Eigen::SparseMatrix<double> sff(nf, nf);
   sff.setFromTriplets(entries.begin(), entries.end());
+  reportProgress(progress, Progress{"solve", 0.0, 0, 1});
   const Eigen::MatrixXd xf = solveDirect(sff, rhs);
+  reportProgress(progress, Progress{"solve", 1.0, 1, 1});
   Eigen::MatrixXd solved = x;
   for (Eigen::Index f = 0; f < nf; ++f)
     solved.row(result.resolved[static_cast<size_t>(f)]) = xf.row(f);

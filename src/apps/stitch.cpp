@@ -43,7 +43,7 @@ int colourChannels(Eigen::Index channels) {
 StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
                          const Eigen::MatrixXd& input, const Eigen::VectorXd& known,
                          const Eigen::MatrixXd& divergence, const Image& like,
-                         const StitchOptions& options) {
+                         const StitchOptions& options, const ProgressCallback& progress) {
   const TexelGrid& grid = domain.grid();
   const TexelOperators& ops = domain.operators();
   const auto n = static_cast<Eigen::Index>(grid.unknownCount());
@@ -72,9 +72,9 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
     }
   }
   SystemSolver solver(grid, options.solver);
-  solver.initAndUpdate(std::move(a));
+  solver.initAndUpdate(std::move(a), progress);
   Eigen::MatrixXd x = xbar;
-  result.report = solver.solve(rhs, x);
+  result.report = solver.solve(rhs, x, progress);
   if (!options.rawSolution) {
     std::vector<int32_t> barely = barelyCoveredUnknowns(domain);
     std::erase_if(barely, [&](int32_t u) { return locked[static_cast<size_t>(u)] != 0; });
@@ -141,7 +141,8 @@ std::vector<int32_t> sourceLabels(const TexelGrid& grid, const Image& segments, 
 }
 
 StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
-                             const Image& segments, const StitchOptions& options) {
+                             const Image& segments, const StitchOptions& options,
+                             const ProgressCallback& progress) {
   options.validate();
   const TexelGrid& grid = domain.grid();
   checkSize(grid, composite, "the composite texture");
@@ -190,7 +191,8 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
                        beta[cell] = same ? 1.0 : 0.0;
                      });
   const Eigen::MatrixXd divergence = domain.operators().modulatedStiffness(beta) * xbar;
-  StitchResult result = solveStitch(domain, xbar, input, known, divergence, composite, options);
+  StitchResult result =
+      solveStitch(domain, xbar, input, known, divergence, composite, options, progress);
   result.sources = sources;
   result.sourceGains = gains;
   result.sourceIllumination = illumination;
@@ -198,7 +200,8 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
 }
 
 StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>& partials,
-                            const std::vector<Image>& confidences, const StitchOptions& options) {
+                            const std::vector<Image>& confidences, const StitchOptions& options,
+                            const ProgressCallback& progress) {
   options.validate();
   if (partials.empty()) throw InvalidInputError("stitching needs at least one partial texture");
   if (partials.size() != confidences.size())
@@ -293,7 +296,8 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
   Eigen::VectorXd known(n);
   for (Eigen::Index u = 0; u < n; ++u) known[u] = weight[u] > 0.0 ? 1.0 : 0.0;
   Image like = partials[0];
-  StitchResult result = solveStitch(domain, xbar, input, known, divergence, like, options);
+  StitchResult result =
+      solveStitch(domain, xbar, input, known, divergence, like, options, progress);
   result.sources = sources;
   result.sourceGains = gains;
   result.sourceIllumination = illumination;

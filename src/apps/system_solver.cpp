@@ -10,6 +10,7 @@
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <utility>
 
 #include "texgrad/core/error.h"
@@ -84,6 +85,9 @@ double addInPlace(Eigen::MatrixXd& x, const Eigen::MatrixXd& z) {
     return acc;
   });
 }
+
+/// The stage update and initAndUpdate report (0 before, 1 after the factorisations).
+constexpr std::string_view kSetupStage = "solver setup";
 
 /// A number as an error message quotes it: %g (0.5, 1e-08), not std::to_string's six decimals.
 std::string formatNumber(double value) {
@@ -179,11 +183,11 @@ struct SystemSolver::Impl {
 
   template <typename Solver>
   static SolveReport cycles(Solver& solver, const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
-                            const SolveControl& control) {
+                            const SolveControl& control, const ProgressCallback& progress) {
     using Scalar = typename Solver::Matrix::Scalar;
     const typename Solver::Matrix bs = b.cast<Scalar>();
     typename Solver::Matrix xs = x.cast<Scalar>();
-    SolveReport report = solver.solve(bs, xs, control);
+    SolveReport report = solver.solve(bs, xs, control, progress);
     x = xs.template cast<double>();
     return report;
   }
@@ -191,14 +195,19 @@ struct SystemSolver::Impl {
   /// Float V-cycles with the residual in double (mixed-precision iterative refinement): each
   /// cycle corrects x by V(b - A x), so accuracy is not limited by float rounding of A x. A
   /// float cycle that diverges (divergesFrom) is undone, and this solve and every later one
-  /// cycle in double instead (useDoubleCycles).
-  SolveReport refinedCycles(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, int count) {
+  /// cycle in double instead (useDoubleCycles). Polls `progress` before every cycle; a cancel
+  /// leaves x at the last cycle's iterate.
+  SolveReport refinedCycles(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, int count,
+                            const ProgressCallback& progress) {
     SolveReport report;
     const auto start = std::chrono::steady_clock::now();
     arena.execute([&] {
       const double norm = b.norm() > 0 ? b.norm() : 1.0;
       report.residuals.push_back(std::sqrt(initialResidual(b, x)) / norm);
+      // r now belongs to this b: a cancelled solve must not leave it to the next (remember).
+      cacheValid = false;
       for (int k = 0; k < count; ++k) {
+        reportSolveProgress(progress, report, count, settings.tolerance);
         visitMultigrid([&](const auto& solver) {
           solver.precondition(r, z);
           return 0;
@@ -223,6 +232,7 @@ struct SystemSolver::Impl {
       remember(b, x);
     });
     report.times.other = secondsSince(start);
+    reportSolveProgress(progress, report, count, settings.tolerance, true);
     return report;
   }
 
@@ -269,10 +279,12 @@ struct SystemSolver::Impl {
     return norm > 0 ? std::sqrt(rr) / norm : std::sqrt(rr);
   }
 
-  SolveReport directSolve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
+  SolveReport directSolve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
+                          const ProgressCallback& progress) {
     const auto start = std::chrono::steady_clock::now();
     SolveReport report;
     report.residuals.push_back(relativeResidual(b, x));
+    reportSolveProgress(progress, report, 1, 0.0);
     const Eigen::MatrixXd previous = x;
     x = direct.solve(b);
     report.iterations = 1;
@@ -281,27 +293,29 @@ struct SystemSolver::Impl {
     report.rmsChange.push_back((x - previous).norm() /
                                std::sqrt(static_cast<double>(std::max<Eigen::Index>(1, x.size()))));
     report.times.other = secondsSince(start);
+    reportSolveProgress(progress, report, 1, 0.0, true);
     return report;
   }
 
-  SolveReport run(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, int count) {
+  SolveReport run(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, int count,
+                  const ProgressCallback& progress) {
     if (x.rows() != b.rows() || x.cols() != b.cols()) x = Eigen::MatrixXd::Zero(b.rows(), b.cols());
     switch (settings.kind) {
       case SolverKind::Direct:
-        return directSolve(b, x);
+        return directSolve(b, x, progress);
       case SolverKind::Multigrid: {
-        if (multigridFloat) return refinedCycles(b, x, count);
+        if (multigridFloat) return refinedCycles(b, x, count, progress);
         SolveControl control;
         control.maxCycles = count;
         control.tolerance = settings.tolerance;
-        return cycles(*multigridDouble, b, x, control);
+        return cycles(*multigridDouble, b, x, control, progress);
       }
       case SolverKind::MultigridCg: {
         CgOptions options;
         options.maxIterations = count;
         options.tolerance = settings.effectiveTolerance();
         return visitMultigrid([&](auto& solver) {
-          return conjugateGradient(a, b, x, multigridPreconditioner(solver), options);
+          return conjugateGradient(a, b, x, multigridPreconditioner(solver), options, progress);
         });
       }
     }
@@ -345,17 +359,19 @@ void adopt(Eigen::SparseMatrix<double>& to, Eigen::SparseMatrix<double>& from) {
 
 }  // namespace
 
-void SystemSolver::update(const Eigen::SparseMatrix<double>& a) {
+void SystemSolver::update(const Eigen::SparseMatrix<double>& a, const ProgressCallback& progress) {
   Eigen::SparseMatrix<double> copy = a;
-  update(std::move(copy));
+  update(std::move(copy), progress);
 }
 
-void SystemSolver::initAndUpdate(const Eigen::SparseMatrix<double>& a) {
+void SystemSolver::initAndUpdate(const Eigen::SparseMatrix<double>& a,
+                                 const ProgressCallback& progress) {
   Eigen::SparseMatrix<double> copy = a;
-  initAndUpdate(std::move(copy));
+  initAndUpdate(std::move(copy), progress);
 }
 
-void SystemSolver::update(Eigen::SparseMatrix<double>&& a) {
+void SystemSolver::update(Eigen::SparseMatrix<double>&& a, const ProgressCallback& progress) {
+  reportProgress(progress, kSetupStage, 0.0);
   const auto start = std::chrono::steady_clock::now();
   adopt(impl_->a, a);
   impl_->a.makeCompressed();
@@ -368,14 +384,18 @@ void SystemSolver::update(Eigen::SparseMatrix<double>&& a) {
       return 0;
     });
   impl_->updateTime = secondsSince(start);
+  reportProgress(progress, kSetupStage, 1.0);
 }
 
-void SystemSolver::initAndUpdate(Eigen::SparseMatrix<double>&& a) {
+void SystemSolver::initAndUpdate(Eigen::SparseMatrix<double>&& a,
+                                 const ProgressCallback& progress) {
   if (impl_->settings.kind == SolverKind::Direct) {
+    reportProgress(progress, kSetupStage, 0.0);
     init(a);
-    update(std::move(a));
+    update(std::move(a), progress);
     return;
   }
+  reportProgress(progress, kSetupStage, 0.0);
   const auto start = std::chrono::steady_clock::now();
   adopt(impl_->a, a);
   impl_->a.makeCompressed();
@@ -386,16 +406,19 @@ void SystemSolver::initAndUpdate(Eigen::SparseMatrix<double>&& a) {
   });
   impl_->initTime = secondsSince(start);
   impl_->updateTime = 0.0;
+  reportProgress(progress, kSetupStage, 1.0);
 }
 
-SolveReport SystemSolver::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
+SolveReport SystemSolver::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
+                                const ProgressCallback& progress) {
   const SolverSettings& s = impl_->settings;
   const int count = s.kind == SolverKind::MultigridCg ? s.maxIterations : s.cycles;
-  return impl_->run(b, x, count);
+  return impl_->run(b, x, count, progress);
 }
 
-SolveReport SystemSolver::step(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
-  return impl_->run(b, x, 1);
+SolveReport SystemSolver::step(const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
+                               const ProgressCallback& progress) {
+  return impl_->run(b, x, 1, progress);
 }
 
 SolveReport SystemSolver::refine(const Eigen::MatrixXd& b, Eigen::MatrixXd& x,

@@ -51,7 +51,7 @@ void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
 
 SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,
                               Eigen::MatrixXd& x, const Preconditioner& preconditioner,
-                              const CgOptions& options) {
+                              const CgOptions& options, const ProgressCallback& progress) {
   options.validate();
   if (a.rows() != a.cols() || b.rows() != a.rows() || x.rows() != b.rows() || x.cols() != b.cols())
     throw InvalidInputError("conjugateGradient: A is " + std::to_string(a.rows()) + " x " +
@@ -77,6 +77,7 @@ SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen:
   Eigen::RowVectorXd rz = columnDots(r, z);
   report.residuals.push_back(r.norm() * scale);
   while (report.iterations < options.maxIterations && report.residuals.back() > options.tolerance) {
+    reportSolveProgress(progress, report, options.maxIterations, options.tolerance);
     start = Clock::now();
     symmetricProduct(a, p, ap);
     report.times.matvec += secondsSince(start);
@@ -102,6 +103,7 @@ SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen:
     report.times.other += secondsSince(start);
   }
   report.converged = report.residuals.back() <= options.tolerance;
+  reportSolveProgress(progress, report, options.maxIterations, options.tolerance, true);
   return report;
 }
 

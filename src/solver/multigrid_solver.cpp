@@ -381,7 +381,8 @@ struct MultigridSolver<Scalar>::Impl {
     return std::sqrt(sumOfSquares(lv.r.data(), lv.r.size()));
   }
 
-  SolveReport solveSlots(const SolveControl& control, int unknowns) {
+  SolveReport solveSlots(const SolveControl& control, int unknowns,
+                         const ProgressCallback& progress) {
     SolveReport report;
     const auto start = Clock::now();
     Level& lv = levels.front();
@@ -392,6 +393,7 @@ struct MultigridSolver<Scalar>::Impl {
     times.other += secondsSince(start);
     while (report.iterations < control.maxCycles &&
            !(control.tolerance > 0.0 && report.residuals.back() <= control.tolerance)) {
+      reportSolveProgress(progress, report, control.maxCycles, control.tolerance);
       previous = lv.x;
       vCycle();
       const auto tail = Clock::now();
@@ -411,6 +413,7 @@ struct MultigridSolver<Scalar>::Impl {
       times.other += secondsSince(tail);
     }
     report.converged = control.tolerance > 0.0 && report.residuals.back() <= control.tolerance;
+    reportSolveProgress(progress, report, control.maxCycles, control.tolerance, true);
     return report;
   }
 };
@@ -467,8 +470,8 @@ void MultigridSolver<Scalar>::cycle(const Matrix& b, Matrix& x) {
 }
 
 template <typename Scalar>
-SolveReport MultigridSolver<Scalar>::solve(const Matrix& b, Matrix& x,
-                                           const SolveControl& control) {
+SolveReport MultigridSolver<Scalar>::solve(const Matrix& b, Matrix& x, const SolveControl& control,
+                                           const ProgressCallback& progress) {
   control.validate();
   const int n = impl_->hierarchy.levelCount() > 0 ? impl_->hierarchy.level(0).unknownCount() : 0;
   if (b.rows() != n || x.rows() != n || x.cols() != b.cols())
@@ -484,7 +487,7 @@ SolveReport MultigridSolver<Scalar>::solve(const Matrix& b, Matrix& x,
     impl_->scatter(b, impl_->levels.front().b);
     impl_->scatter(x, impl_->levels.front().x);
     impl_->times.other += secondsSince(start);
-    report = impl_->solveSlots(control, n);
+    report = impl_->solveSlots(control, n, progress);
     const auto tail = Clock::now();
     impl_->gather(impl_->levels.front().x, x);
     impl_->times.other += secondsSince(tail);

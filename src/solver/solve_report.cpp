@@ -33,4 +33,26 @@ std::string SolveReport::toString() const {
   return os.str();
 }
 
+double solveFraction(const SolveReport& report, int maxIterations, double tolerance) {
+  if (report.converged || report.iterations >= maxIterations) return 1.0;
+  double fraction = maxIterations > 0 ? double(report.iterations) / maxIterations : 0.0;
+  if (tolerance > 0.0 && !report.residuals.empty()) {
+    const double first = report.residuals.front();
+    // The best residual so far, so a residual that rises for a cycle never moves the bar back.
+    double best = first;
+    for (const double r : report.residuals)
+      if (r < best) best = r;  // NaN compares false and is skipped
+    if (first > tolerance && best > 0.0 && std::isfinite(first))
+      fraction = std::max(fraction, std::log(first / best) / std::log(first / tolerance));
+  }
+  return std::clamp(fraction, 0.0, 1.0);
+}
+
+void reportSolveProgress(const ProgressCallback& progress, const SolveReport& report,
+                         int maxIterations, double tolerance, bool finished) {
+  if (!progress) return;
+  const double fraction = finished ? 1.0 : solveFraction(report, maxIterations, tolerance);
+  reportProgress(progress, Progress{"solve", fraction, report.iterations, maxIterations});
+}
+
 }  // namespace texgrad

@@ -181,6 +181,36 @@ TEST(Filter, ConstantBetaMapMatchesGlobalBetaAndHalfMapsActLocally) {
   EXPECT_GT(changeRight, 0.0);
 }
 
+TEST(Filter, ReportsSetupAndSolveStagesAndSolvesAgainAfterACancel) {
+  const TexelDomain domain(procedural::cubeSphere(8), 128, 128);
+  const Image texture = test::randomTexture(128, 128, 3, 11);
+  FilterOptions options = withSolver(SolverKind::MultigridCg, 0.2);
+  options.solver.tolerance = 1e-8;  // enough iterations to cancel in the middle
+  std::vector<std::string> stages;
+  int lastStep = -1;
+  const auto record = [&](const Progress& p) {
+    if (stages.empty() || stages.back() != p.stage) stages.emplace_back(p.stage);
+    lastStep = p.step;
+    return true;
+  };
+  const FilterResult reference = filterTexture(domain, texture, options, record);
+  EXPECT_EQ(stages, (std::vector<std::string>{"solver setup", "solve"}));
+  EXPECT_EQ(lastStep, reference.report.iterations);
+  ASSERT_GT(reference.report.iterations, 3);
+
+  InteractiveFilter filter(domain, texture, options);
+  int cancelledAt = -1;
+  EXPECT_THROW(filter.solve([&](const Progress& p) {
+    cancelledAt = p.step;
+    return p.step < 3;
+  }),
+               Cancelled);
+  EXPECT_EQ(cancelledAt, 3) << "polled before every iteration";
+  filter.solve();
+  // CG restarted from the third iterate reaches the same tolerance: equal to far below 8 bits.
+  EXPECT_LT(test::activeRms(domain, filter.image(), reference.image), 1e-6);
+}
+
 TEST(Filter, InactiveTexelsAreUntouched) {
   const TexelDomain domain(procedural::cube(3), 96, 64);
   const Image input = test::randomTexture(96, 64, 3, 4);

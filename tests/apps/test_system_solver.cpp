@@ -7,6 +7,7 @@
 #include <functional>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "../solver/synthetic_problem.h"
 #include "texgrad/apps/system_solver.h"
@@ -218,6 +219,80 @@ TEST(SystemSolver, RvalueUpdateTakesTheMatrixOverAndConstUpdateCopiesIt) {
     solver.update(std::move(next));
     EXPECT_EQ(solver.matrix().valuePtr(), storage);
     EXPECT_EQ(next.nonZeros(), 0);
+  }
+}
+
+namespace {
+
+/// The solves of one kind, with their progress reports copied out of the callback.
+struct SolveRecord {
+  std::vector<std::string> stages;
+  std::vector<double> fractions;
+  std::vector<int> steps;
+};
+
+ProgressCallback recordInto(SolveRecord& record, int cancelAtStep = -1) {
+  return [&record, cancelAtStep](const Progress& p) {
+    record.stages.emplace_back(p.stage);
+    record.fractions.push_back(p.fraction);
+    record.steps.push_back(p.step);
+    return p.step != cancelAtStep;
+  };
+}
+
+}  // namespace
+
+TEST(SystemSolver, EveryKindReportsSetupAndSolveAndIsReusableAfterACancel) {
+  const test::SyntheticProblem p = test::multiChartProblem(8);
+  const Eigen::SparseMatrix<double> a = p.system(1e2);
+  const Eigen::MatrixXd b0 = test::randomBlock(a.rows(), 2, 5);
+  const Eigen::MatrixXd b1 = test::randomBlock(a.rows(), 2, 6);
+  const Eigen::MatrixXd b2 = test::randomBlock(a.rows(), 2, 7);
+  struct Case {
+    SolverKind kind;
+    bool single;
+  };
+  for (const Case c : {Case{SolverKind::Multigrid, true}, Case{SolverKind::Multigrid, false},
+                       Case{SolverKind::MultigridCg, true}, Case{SolverKind::Direct, false}}) {
+    SCOPED_TRACE(toString(c.kind) + (c.single ? " float" : " double"));
+    SolverSettings settings = floatMultigrid();
+    settings.kind = c.kind;
+    settings.singlePrecision = c.single;
+    SystemSolver solver(p.grid, settings);
+    SolveRecord setup;
+    solver.initAndUpdate(a, recordInto(setup));
+    ASSERT_FALSE(setup.stages.empty());
+    for (const std::string& stage : setup.stages) EXPECT_EQ(stage, "solver setup");
+    EXPECT_EQ(setup.fractions.front(), 0.0);
+    EXPECT_EQ(setup.fractions.back(), 1.0);
+
+    Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 2);
+    SolveRecord record;
+    const SolveReport report = solver.solve(b0, x, recordInto(record));
+    ASSERT_EQ(static_cast<int>(record.stages.size()), report.iterations + 1);
+    for (size_t i = 0; i < record.stages.size(); ++i) {
+      EXPECT_EQ(record.stages[i], "solve");
+      EXPECT_EQ(record.steps[i], static_cast<int>(i));
+      if (i > 0) {
+        EXPECT_GE(record.fractions[i], record.fractions[i - 1]);
+      }
+    }
+    EXPECT_EQ(record.fractions.back(), 1.0);
+
+    // Cancelled at the first poll, with x the iterate of the last solve and a new b: the next
+    // solve, for yet another b from that x, is the one a fresh solver computes (the residual
+    // the cancelled solve formed for b1 must not be taken for that of x and b0).
+    SolveRecord cancelled;
+    Eigen::MatrixXd y = x;
+    EXPECT_THROW(solver.solve(b1, y, recordInto(cancelled, 0)), Cancelled);
+    EXPECT_EQ(cancelled.stages.size(), 1u);
+    EXPECT_EQ(y, x);
+    solver.solve(b2, y);
+    SystemSolver fresh(p.grid, settings);
+    fresh.initAndUpdate(a);
+    Eigen::MatrixXd z = x;
+    fresh.solve(b2, z);
+    EXPECT_LE((y - z).norm(), 1e-12 * z.norm());
   }
 }
 

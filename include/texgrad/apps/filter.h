@@ -52,20 +52,25 @@ struct FilterResult {
 };
 
 /// Filters `texture` (at the domain's resolution). Multigrid starts from the input texture.
+/// Reports stages "solver setup" and "solve" (with the cycle or iteration count) to `progress`,
+/// which may cancel (Cancelled).
 FilterResult filterTexture(const TexelDomain& domain, const Image& texture,
-                           const FilterOptions& options);
+                           const FilterOptions& options, const ProgressCallback& progress = {});
 
 /// The filter as a stateful solver for interactive use: change alpha / beta map, then step.
 class InteractiveFilter {
  public:
-  /// Sets up the solver (init + update phases) for `texture` on `domain`, which must outlive it.
-  InteractiveFilter(const TexelDomain& domain, const Image& texture, const FilterOptions& options);
+  /// Sets up the solver (init + update phases) for `texture` on `domain`, which must outlive it;
+  /// reports stage "solver setup" to `progress`, which may cancel.
+  InteractiveFilter(const TexelDomain& domain, const Image& texture, const FilterOptions& options,
+                    const ProgressCallback& progress = {});
   /// New alpha, uniform beta and optional per-cell beta (replaces beta): numeric update only.
   void setParameters(double alpha, double beta, std::vector<double> betaPerCell = {});
   /// One V-cycle (or an exact solve with the direct solver) towards the current target.
-  SolveReport step();
-  /// Runs the configured number of cycles (or the direct solve).
-  SolveReport solve();
+  SolveReport step(const ProgressCallback& progress = {});
+  /// Runs the configured number of cycles (or the direct solve), reporting stage "solve" to
+  /// `progress` (SystemSolver::solve); after a cancel the filter can solve again.
+  SolveReport solve(const ProgressCallback& progress = {});
   /// Current solution as an image (input's size, channels and format; inactive texels as input),
   /// barely covered texels replaced unless FilterOptions::rawSolution.
   Image image() const;
@@ -74,6 +79,10 @@ class InteractiveFilter {
   double updateSeconds() const { return solver_.updateSeconds(); }
 
  private:
+  /// setParameters, reporting the numeric update to `progress`.
+  void applyParameters(double alpha, double beta, std::vector<double> betaPerCell,
+                       const ProgressCallback& progress);
+
   const TexelDomain& domain_;
   Image input_;    ///< texture as given
   Image working_;  ///< a normal map's decoded vectors (empty otherwise: the solve acts on input_)

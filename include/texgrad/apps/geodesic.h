@@ -127,8 +127,10 @@ class GeodesicSolver {
   /// float and stops near 1e-4 of the largest distance (see update()).
   static constexpr double kDistanceScreening = 1e-5;
 
-  /// Builds gradient samples and runs both solvers' init and update phases.
-  explicit GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options = {});
+  /// Builds gradient samples and runs both solvers' init and update phases, reporting stages
+  /// "heat setup" and "distance setup" (and "dirichlet heat setup") to `progress`.
+  explicit GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options = {},
+                          const ProgressCallback& progress = {});
   ~GeodesicSolver();
   GeodesicSolver(GeodesicSolver&&) noexcept;
   GeodesicSolver& operator=(GeodesicSolver&&) noexcept;
@@ -158,8 +160,10 @@ class GeodesicSolver {
   /// Largest relative residual ||b - A x|| / ||b|| (double) of the current heat and distance
   /// iterates; one sparse product per system, so displays ask for it a few times a second.
   double residual() const;
-  /// Full solves: settings.cycles V-cycles (or CG / direct) on A1, then on A2.
-  void solve();
+  /// Full solves: settings.cycles V-cycles (or CG / direct) on A1, then on A2, reporting stages
+  /// "heat solve" (and "dirichlet heat solve") and "distance solve" with their cycle counts to
+  /// `progress`, which may cancel (Cancelled; solve again to finish).
+  void solve(const ProgressCallback& progress = {});
 
   /// Current distances per unknown, model units (see GeodesicOffset for the value at sources);
   /// +infinity on parts of the surface not connected to a source.
@@ -189,8 +193,9 @@ class GeodesicSolver {
 };
 
 /// One-shot heat-method distances from `sources` (at least one): GeodesicSolver + solve(), plus
-/// the farthest texel.
+/// the farthest texel; reports the stages of both to `progress`, which may cancel.
 GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,
-                                const GeodesicOptions& options = {});
+                                const GeodesicOptions& options = {},
+                                const ProgressCallback& progress = {});
 
 }  // namespace texgrad

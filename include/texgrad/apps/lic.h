@@ -94,7 +94,10 @@ class LineIntegralConvolution {
 
   /// Diffuses `noise` (unknowns x k) along the field and sharpens the result; values are the
   /// unknowns' (not clamped). Solve reports go to `report` if given.
-  Eigen::MatrixXd convolve(const Eigen::MatrixXd& noise, LicReport* report = nullptr);
+  /// Reports stage "solve" (then "sharpen solve" if sharpening) with the iteration counts to
+  /// `progress`, which may cancel (Cancelled).
+  Eigen::MatrixXd convolve(const Eigen::MatrixXd& noise, LicReport* report = nullptr,
+                           const ProgressCallback& progress = {});
   /// The per-face metric h in use.
   const std::vector<Eigen::Matrix2d>& metric() const;
   /// Setup diagnostics (setupSeconds, zeroFieldFaces).
@@ -122,7 +125,8 @@ Eigen::MatrixXd licContrast(const Eigen::MatrixXd& values, const Eigen::VectorXd
                             double contrast);
 
 /// One-shot LIC: noise from options.seed, diffusion, sharpening, contrast, image. Reports the
-/// stages "lic setup" and "lic solve" (0 and 1 each) to `progress`, which may cancel.
+/// stages "lic setup" (0 and 1), "lic solve" and, if sharpening, "lic sharpen" (with the
+/// iteration counts) to `progress`, which may cancel.
 LicResult lineIntegralConvolution(const TexelDomain& domain,
                                   const std::vector<Eigen::Vector2d>& fieldTexel,
                                   const LicOptions& options, const ProgressCallback& progress = {});

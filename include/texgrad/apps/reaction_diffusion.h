@@ -82,7 +82,7 @@ class ReactionDiffusion {
   void reseed(uint64_t seed);
   /// One time step.
   void step();
-  /// `steps` time steps, reporting progress (stage "react") about 100 times.
+  /// `steps` time steps, reporting progress (stage "react", step counts) after every step.
   void run(int steps, const ProgressCallback& progress = {});
 
   /// Concentration of u (1 = no pattern) per unknown.

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "texgrad/apps/texel_domain.h"
+#include "texgrad/core/progress.h"
 #include "texgrad/io/image.h"
 
 namespace texgrad {
@@ -35,8 +36,10 @@ struct SeamsOptions {
 /// (with a screening towards the input of relative weight 1e-9 for conditioning). Texels under
 /// stacked or mirrored charts that no chart boundary crosses stay fixed. Candidates joined by S
 /// to no fixed texel have no data to agree with and are not re-solved (unanchoredTexels). All
-/// texels not re-solved are returned bit for bit.
+/// texels not re-solved are returned bit for bit. Reports stage "solve" to `progress` before (0)
+/// and after (1) the direct solve, which cannot be cancelled while it runs.
 SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const Image& mask = {},
-                        const SeamsOptions& options = {});
+                        const SeamsOptions& options = {},
+                        const ProgressCallback& progress = {});
 
 }  // namespace texgrad

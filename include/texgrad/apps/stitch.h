@@ -50,15 +50,19 @@ struct StitchResult {
 
 /// Composite mode: `composite` holds each texel from one source, `segments` a distinct colour
 /// per source (black = no source). The target gradient is the composite's on cells whose texels
-/// all share one source, zero on cells that straddle sources or touch unknown texels.
+/// all share one source, zero on cells that straddle sources or touch unknown texels. Reports
+/// stages "solver setup" and "solve" to `progress`, which may cancel (Cancelled).
 StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
-                             const Image& segments, const StitchOptions& options);
+                             const Image& segments, const StitchOptions& options,
+                             const ProgressCallback& progress = {});
 
 /// Partials mode: N partial textures with confidence maps (channel 0 in [0, 1]). The target
 /// gradient on a cell is the confidence-weighted mean of the partials' gradients (a partial's
 /// weight on a cell = its smallest confidence over the cell's texels); zero where none sees it.
+/// Reports and cancels as stitchComposite.
 StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>& partials,
-                            const std::vector<Image>& confidences, const StitchOptions& options);
+                            const std::vector<Image>& confidences, const StitchOptions& options,
+                            const ProgressCallback& progress = {});
 
 /// Distinct source label per unknown from a segment image (0 = none, 1.. = sources in order of
 /// first appearance), and the number of sources.

@@ -69,21 +69,28 @@ class SystemSolver {
   /// interior/boundary split, MultigridOptions::weakRowReach; the direct solver ignores them).
   void init(const Eigen::SparseMatrix<double>& pattern);
   /// Numeric phase for a new A with the same pattern (new alpha, beta or metric). The solver
-  /// keeps a copy of A for residuals.
-  void update(const Eigen::SparseMatrix<double>& a);
+  /// keeps a copy of A for residuals. Reports stage "solver setup" to `progress` before (0) and
+  /// after (1) the factorisations, which cannot be cancelled while they run.
+  void update(const Eigen::SparseMatrix<double>& a, const ProgressCallback& progress = {});
   /// As update, but takes over a's storage (a temporary, or std::move(a): a is left empty)
   /// instead of copying it. Eigen 3.4's SparseMatrix has no move constructor or assignment, so
   /// this overload is what spares the copy.
-  void update(Eigen::SparseMatrix<double>&& a);
+  void update(Eigen::SparseMatrix<double>&& a, const ProgressCallback& progress = {});
   /// init(a) then update(a); multigrid forms its Galerkin products once instead of twice.
-  void initAndUpdate(const Eigen::SparseMatrix<double>& a);
+  void initAndUpdate(const Eigen::SparseMatrix<double>& a, const ProgressCallback& progress = {});
   /// As initAndUpdate, taking over a's storage (see update).
-  void initAndUpdate(Eigen::SparseMatrix<double>&& a);
-  /// Solves A X = B (n x k), using X as the initial guess for the iterative kinds.
-  SolveReport solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
+  void initAndUpdate(Eigen::SparseMatrix<double>&& a, const ProgressCallback& progress = {});
+  /// Solves A X = B (n x k), using X as the initial guess for the iterative kinds. Reports stage
+  /// "solve" to `progress` before every V-cycle or CG iteration (before and after the direct
+  /// solve) and at the end, with the count done and the most the settings allow
+  /// (reportSolveProgress). If it asks to cancel, throws Cancelled; X then holds an iterate (or
+  /// the initial guess) and the solver is ready for the next solve.
+  SolveReport solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
+                    const ProgressCallback& progress = {});
   /// One V-cycle (Multigrid and MultigridCg kinds) or an exact solve (Direct), for interactive
-  /// refinement.
-  SolveReport step(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
+  /// refinement; reports and cancels as solve.
+  SolveReport step(const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
+                   const ProgressCallback& progress = {});
   /// As step, but float multigrid cycles x without the double-precision residual of step
   /// (faster: no sparse product in double; accuracy stops improving near float rounding). For
   /// frame-by-frame display. The report holds the relative residual of the new x only, or no

@@ -24,9 +24,11 @@ using Preconditioner = std::function<void(const Eigen::MatrixXd& r, Eigen::Matri
 
 /// Solves A X = B (A n x n SPD with both triangles stored; B, X n x k) by preconditioned CG, one
 /// independent recurrence per column, starting from X. Non-convergence is reported, not thrown.
+/// Reports to `progress` before every iteration and at the end (reportSolveProgress); if it asks
+/// to cancel, throws Cancelled with X holding the last iterate.
 SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,
                               Eigen::MatrixXd& x, const Preconditioner& preconditioner,
-                              const CgOptions& options = {});
+                              const CgOptions& options = {}, const ProgressCallback& progress = {});
 
 /// One symmetric V-cycle from zero as an SPD preconditioner; `solver` must outlive the result.
 template <typename Scalar>

@@ -110,7 +110,10 @@ class MultigridSolver {
   /// One V-cycle (Fig. 8) improving x in place for right-hand side b (both n x k).
   void cycle(const Matrix& b, Matrix& x);
   /// V-cycles from the initial guess x until control is met; residual and change per cycle.
-  SolveReport solve(const Matrix& b, Matrix& x, const SolveControl& control);
+  /// Reports to `progress` before every cycle and at the end (reportSolveProgress); if it asks
+  /// to cancel, throws Cancelled with x unchanged and the solver ready for the next solve.
+  SolveReport solve(const Matrix& b, Matrix& x, const SolveControl& control,
+                    const ProgressCallback& progress = {});
   /// One V-cycle on x in place for right-hand side b, both given in double and converted to
   /// the cycle precision and back (float cycles thus stop improving near float rounding).
   /// Returns ||b - A x|| / ||b|| for the new x in the cycle precision, fused into the last

@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "texgrad/core/progress.h"
+
 namespace texgrad {
 
 /// Wall-clock seconds spent in each phase of a multigrid V-cycle (paper §6.3, Fig. 10).
@@ -35,5 +37,17 @@ struct SolveReport {
   /// One line per iteration: index, residual, RMS change; then the phase times.
   std::string toString() const;
 };
+
+/// Share of a solve done after report.iterations of at most maxIterations, for progress bars:
+/// the larger of iterations / maxIterations and the share of the way, in log residual, from the
+/// first residual to `tolerance` that the best residual so far has gone (0: iterations only).
+/// Non-decreasing over the iterations of one solve; 1 once converged or at maxIterations.
+double solveFraction(const SolveReport& report, int maxIterations, double tolerance);
+
+/// Reports a solve to `progress` (stage "solve", step = report.iterations, steps =
+/// maxIterations, fraction = solveFraction, or 1 once `finished`); throws Cancelled if it asks to
+/// stop. Solvers call it before each iteration and once finished.
+void reportSolveProgress(const ProgressCallback& progress, const SolveReport& report,
+                         int maxIterations, double tolerance, bool finished = false);
 
 }  // namespace texgrad

@@ -1,0 +1,116 @@
+"""The module's output equals the CLI's for the same options (same decode, same library calls).
+
+Float outputs are compared through float EXR files (bit for bit); 8-bit outputs through PNG, also
+bit for bit: the module quantises integer outputs with the rule image files use.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+import texgrad
+from conftest import SIZE, SPOT, run_cli
+
+
+def exr(path):
+    return texgrad.read_image(path, dtype=np.float32)
+
+
+def test_filter_float_matches_cli(tmp_path, spot_mesh, spot_texture_file):
+    out = tmp_path / "filtered.exr"
+    run_cli("filter", SPOT, spot_texture_file, "--beta", "0.3", "--out", out,
+            "--bit-depth", "float", "--quiet")
+    image = texgrad.read_image(spot_texture_file, dtype=np.float32)
+    result = texgrad.filter(spot_mesh, image, beta=0.3)
+    assert result.dtype == np.float32
+    assert np.array_equal(result, exr(out)[..., : result.shape[2]])
+
+
+def test_filter_uint8_matches_cli_png(tmp_path, spot_mesh, spot_texture_file):
+    out = tmp_path / "filtered.png"
+    run_cli("filter", SPOT, spot_texture_file, "--beta", "2", "--out", out, "--quiet")
+    image = texgrad.read_image(spot_texture_file)
+    assert image.dtype == np.uint8
+    result = texgrad.filter(spot_mesh, image, beta=2.0)
+    assert result.dtype == np.uint8
+    assert np.array_equal(result, texgrad.read_image(out))
+
+
+def test_filter_beta_map_matches_cli(tmp_path, spot_mesh, spot_texture_file):
+    ramp = np.tile(np.linspace(0, 1, 64, dtype=np.float32), (64, 1))
+    texgrad.write_image(tmp_path / "beta.exr", ramp, bit_depth="float")
+    out = tmp_path / "filtered.exr"
+    run_cli("filter", SPOT, spot_texture_file, "--beta-map", tmp_path / "beta.exr",
+            "--beta-range", "0", "3", "--out", out, "--bit-depth", "float", "--quiet")
+    image = texgrad.read_image(spot_texture_file, dtype=np.float32)
+    result = texgrad.filter(spot_mesh, image, beta_map=ramp, beta_range=(0, 3))
+    assert np.array_equal(result, exr(out))
+
+
+def test_seams_matches_cli(tmp_path, spot_mesh, spot_texture_file):
+    out = tmp_path / "seams.exr"
+    run_cli("seams", SPOT, spot_texture_file, "--out", out, "--bit-depth", "float", "--quiet")
+    image = texgrad.read_image(spot_texture_file, dtype=np.float32)
+    assert np.array_equal(texgrad.seams(spot_mesh, image), exr(out))
+
+
+def test_dilate_matches_cli(tmp_path, spot_mesh, spot_texture_file):
+    out = tmp_path / "dilated.exr"
+    run_cli("dilate", SPOT, spot_texture_file, "--radius", "3", "--out", out,
+            "--bit-depth", "float", "--quiet")
+    image = texgrad.read_image(spot_texture_file, dtype=np.float32)
+    assert np.array_equal(texgrad.dilate(spot_mesh, image, radius=3), exr(out))
+
+
+def test_stitch_matches_cli(tmp_path, spot_mesh, spot_texture_file):
+    image = texgrad.read_image(spot_texture_file, dtype=np.float32)
+    segments = np.zeros((SIZE, SIZE, 3), np.uint8)
+    segments[:, : SIZE // 2] = (255, 0, 0)
+    segments[:, SIZE // 2:] = (0, 255, 0)
+    composite = image.copy()
+    composite[:, SIZE // 2:] *= 0.7  # the second source is darker
+    texgrad.write_image(tmp_path / "composite.exr", composite, bit_depth="float")
+    texgrad.write_image(tmp_path / "segments.png", segments)
+    out = tmp_path / "stitched.exr"
+    run_cli("stitch", SPOT, "--composite", tmp_path / "composite.exr", "--segments",
+            tmp_path / "segments.png", "--out", out, "--bit-depth", "float", "--quiet")
+    result = texgrad.stitch(spot_mesh, composite=composite, segments=segments)
+    assert np.array_equal(result, exr(out))
+
+
+def test_geodesic_matches_cli(tmp_path, spot_mesh):
+    out = tmp_path / "distance.exr"
+    run_cli("geodesic", SPOT, "--source-vertex", "100", "--resolution", SIZE, "--out", out,
+            "--quiet")
+    result = texgrad.geodesic(spot_mesh, source_vertices=[100], resolution=SIZE)
+    assert result.shape == (SIZE, SIZE)
+    assert np.array_equal(result, exr(out)[..., 0])
+
+
+def test_lic_matches_cli(tmp_path, spot_mesh):
+    out = tmp_path / "lic.exr"
+    run_cli("lic", SPOT, "--resolution", 128, "--out", out, "--bit-depth", "float", "--quiet")
+    assert np.array_equal(texgrad.lic(spot_mesh, 128), exr(out)[..., 0])
+
+
+def test_react_matches_cli(tmp_path, spot_mesh):
+    out = tmp_path / "react.exr"
+    run_cli("react", SPOT, "--resolution", 128, "--steps", 40, "--out", out,
+            "--bit-depth", "float", "--quiet")
+    assert np.array_equal(texgrad.react(spot_mesh, 128, steps=40), exr(out)[..., 0])
+
+
+@pytest.mark.parametrize("kind", ["active", "chart"])
+def test_mask_matches_cli(tmp_path, spot_mesh, kind):
+    out = tmp_path / "mask.png"
+    run_cli("mask", SPOT, "--resolution", SIZE, "--kind", kind, "--out", out, "--quiet")
+    assert np.array_equal(texgrad.mask(spot_mesh, SIZE, kind=kind), texgrad.read_image(out))
+
+
+def test_atlas_report_matches_info_json(spot_mesh):
+    expected = json.loads(run_cli("info", SPOT, "--resolution", SIZE, "--json"))
+    report = spot_mesh.atlas_report(SIZE)
+    expected.pop("mesh")
+    assert report.pop("mesh") == str(SPOT)
+    assert report == expected
