@@ -408,6 +408,7 @@ void StageTimer::print() const {
 nlohmann::json toJson(const SolveReport& report) {
   return {{"iterations", report.iterations},
           {"converged", report.converged},
+          {"diverged", report.diverged},
           {"residuals", report.residuals},
           {"rms_change", report.rmsChange},
           {"seconds",
