@@ -12,9 +12,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <new>
 #include <optional>
 #include <sstream>
+#include <string>
 #include <utility>
 
 #include "texgrad/core/error.h"
@@ -145,17 +147,54 @@ const CLI::Validator& nonNegativeValidator() {
   return validator;
 }
 
-ProgressCallback terminalProgress(bool enabled) {
-  if (!enabled || !isatty(STDERR_FILENO)) return {};
-  return [](std::string_view stage, double fraction) {
-    const int filled = static_cast<int>(fraction * kProgressBarWidth + 0.5);
-    std::fprintf(stderr, "\r%-24.*s [%-*s] %3d%%", static_cast<int>(stage.size()), stage.data(),
-                 kProgressBarWidth, std::string(static_cast<size_t>(filled), '#').c_str(),
-                 static_cast<int>(fraction * 100.0 + 0.5));
-    if (fraction >= 1.0) std::fputc('\n', stderr);
+namespace {
+
+/// " (12/320)" for a report that counts steps, else "".
+std::string stepText(const Progress& p) {
+  if (p.steps <= 0) return {};
+  return " (" + std::to_string(p.step) + "/" + std::to_string(p.steps) + ")";
+}
+
+/// One line redrawn in place: stage, bar, percentage and step count; a newline once a stage ends.
+ProgressCallback progressBar() {
+  return [](const Progress& p) {
+    const int filled = static_cast<int>(p.fraction * kProgressBarWidth + 0.5);
+    std::fprintf(stderr, "\r%-24.*s [%-*s] %3d%%%-14s", static_cast<int>(p.stage.size()),
+                 p.stage.data(), kProgressBarWidth,
+                 std::string(static_cast<size_t>(filled), '#').c_str(),
+                 static_cast<int>(p.fraction * 100.0 + 0.5), stepText(p).c_str());
+    if (p.fraction >= 1.0) std::fputc('\n', stderr);
     std::fflush(stderr);
     return true;
   };
+}
+
+/// One line per report that starts a stage, moves it by a whole percent or ends it: at most 101
+/// lines a stage however many steps it has ("texgrad: solve 37% (12/320)").
+ProgressCallback progressLines() {
+  struct State {
+    std::string stage;
+    int percent = -1;
+  };
+  return [state = std::make_shared<State>()](const Progress& p) {
+    const int percent = static_cast<int>(p.fraction * 100.0);
+    if (p.stage == state->stage && percent <= state->percent) return true;
+    state->stage = p.stage;
+    state->percent = percent;
+    std::fprintf(stderr, "texgrad: %.*s %d%%%s\n", static_cast<int>(p.stage.size()), p.stage.data(),
+                 percent, stepText(p).c_str());
+    std::fflush(stderr);
+    return true;
+  };
+}
+
+}  // namespace
+
+ProgressCallback progressDisplay(const ReportArgs& args) {
+  if (args.progress == "bar") return progressBar();
+  if (args.progress == "lines") return progressLines();
+  if (args.progress == "auto" && !args.quiet && isatty(STDERR_FILENO)) return progressBar();
+  return {};
 }
 
 namespace {
@@ -340,7 +379,14 @@ void addReportOptions(CLI::App* cmd, ReportArgs& args) {
                 "Print a JSON summary (texels, phases, cycles, residuals, peak memory) on stdout");
   cmd->add_flag("--timings", args.timings,
                 "Print the time of each stage and the peak resident memory on stderr");
-  cmd->add_flag("--quiet,-q", args.quiet, "No progress bar and no summary line");
+  cmd->add_flag("--quiet,-q", args.quiet,
+                "No summary line, and no progress unless --progress asks for it");
+  cmd->add_option("--progress", args.progress,
+                  "Progress on stderr of every stage (read, operators, solver set-up, solve with "
+                  "its cycle or iteration count, write): bar (one line redrawn), lines (a line "
+                  "per step, for logs and pipes), none, or auto (bar when stderr is a terminal "
+                  "and --quiet is not given)")
+      ->check(CLI::IsMember({"auto", "bar", "lines", "none"}));
 }
 
 namespace {
@@ -382,6 +428,7 @@ int64_t peakResidentBytes() {
 nlohmann::json toJson(const SolveReport& report) {
   return {{"iterations", report.iterations},
           {"converged", report.converged},
+          {"diverged", report.diverged},
           {"residuals", report.residuals},
           {"rms_change", report.rmsChange},
           {"seconds",

@@ -6,6 +6,8 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <type_traits>
 #include <utility>
 
 #include "texgrad/apps/system_solver.h"
@@ -39,9 +41,6 @@ const CLI::Validator& resolutionValidator();
 /// > 0, got -1") instead of CLI11's range dump.
 const CLI::Validator& positiveValidator();
 const CLI::Validator& nonNegativeValidator();
-
-/// Progress callback drawing a bar on stderr when it is a terminal (nothing otherwise).
-ProgressCallback terminalProgress(bool enabled);
 
 /// Installs SIGINT, SIGTERM and SIGHUP handlers (unless the signal is ignored) that delete the
 /// temporaries of outputs being written (removePendingTemporaries) and then re-raise the signal,
@@ -86,10 +85,31 @@ void addSolverOptions(CLI::App* cmd, SolverArgs& args, const SolverSettings& def
 struct ReportArgs {
   bool json = false;     ///< print a JSON summary on stdout
   bool timings = false;  ///< print phase timings on stderr
-  bool quiet = false;    ///< no progress bar, no summary line
+  bool quiet = false;    ///< no summary line, and no progress unless --progress asks for it
+  /// --progress: "bar" (one line redrawn), "lines" (one line per step, for logs and pipes),
+  /// "none", or "auto": bar when stderr is a terminal and --quiet is not given, else none.
+  std::string progress = "auto";
 };
-/// Registers --json, --timings and --quiet on `cmd`.
+/// Registers --json, --timings, --quiet and --progress on `cmd`.
 void addReportOptions(CLI::App* cmd, ReportArgs& args);
+
+/// The progress display --progress and --quiet ask for, on stderr: stage, percentage and, for
+/// solves and time steps, the count done and the most there can be ("solve 37% (12/320)").
+ProgressCallback progressDisplay(const ReportArgs& args);
+
+/// Runs `work` as the stage `name` of `progress`: reports 0 before and 1 after it.
+template <typename Work>
+auto runStage(const ProgressCallback& progress, std::string_view name, Work&& work) {
+  reportProgress(progress, name, 0.0);
+  if constexpr (std::is_void_v<std::invoke_result_t<Work>>) {
+    work();
+    reportProgress(progress, name, 1.0);
+  } else {
+    auto result = work();
+    reportProgress(progress, name, 1.0);
+    return result;
+  }
+}
 
 /// Wall-clock timer of named stages, printed with --timings and included in --json.
 class StageTimer {

@@ -27,9 +27,11 @@ void runFilter(FilterArgs args) {
   args.options.solver = args.solver.settings();
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   if (args.options.normalMap && args.slot == "baseColor") args.slot = "normal";
-  const ProgressCallback progress = terminalProgress(!args.report.quiet);
+  const ProgressCallback progress = progressDisplay(args.report);
+  reportProgress(progress, "read", 0.0);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
+  reportProgress(progress, "read", 1.0);
   timer.lap("read");
   // Only a beta map (S_beta) re-assembles the stiffness; otherwise the piece integrals go.
   OperatorOptions operatorOptions;
@@ -50,10 +52,12 @@ void runFilter(FilterArgs args) {
     args.options.betaPerCell =
         cellValuesFromMap(domain.grid(), map, args.betaRange[0], args.betaRange[1]);
   }
-  const FilterResult result = filterTexture(domain, texture, args.options);
+  const FilterResult result = filterTexture(domain, texture, args.options, progress);
   timer.lap("solve");
-  const PixelFormat stored = writeTextureOutput(args.out, domain.mesh(), result.image, args.slot,
-                                                args.bitDepth, args.report.quiet);
+  const PixelFormat stored = runStage(progress, "write", [&] {
+    return writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth,
+                              args.report.quiet);
+  });
   timer.lap("write");
   printWritten(args.report.quiet, args.out, result.image, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();

@@ -129,7 +129,8 @@ void runGeodesic(GeodesicArgs args) {
   const std::vector<GeodesicSource> sources = parseSources(args);
   checkImageOutputArgs(args.out, "");
   if (!args.png.empty()) checkImageOutputArgs(args.png, "");
-  const ProgressCallback progress = terminalProgress(!args.report.quiet);
+  const ProgressCallback progress = progressDisplay(args.report);
+  reportProgress(progress, "read", 0.0);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   for (const GeodesicSource& s : sources)  // fail before the expensive operator build
     if (s.kind == GeodesicSource::Kind::Vertex &&
@@ -138,15 +139,15 @@ void runGeodesic(GeodesicArgs args) {
                               args.mesh + " has " + std::to_string(mesh.positions.size()) +
                               " vertices (0-based)");
   const auto [width, height] = chooseResolution(args, mesh);
+  reportProgress(progress, "read", 1.0);
   timer.lap("read");
   const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
                            progress);
   requireUvSourcesOnCharts(domain, sources, args.mesh);
   timer.lap("operators");
-  reportProgress(progress, "geodesic", 0.0);
-  const GeodesicResult result = geodesicDistance(domain, sources, args.options);
-  reportProgress(progress, "geodesic", 1.0);
+  const GeodesicResult result = geodesicDistance(domain, sources, args.options, progress);
   timer.lap("geodesic");
+  reportProgress(progress, "write", 0.0);
 
   Image distances(width, height, 1, PixelFormat::Float);
   scatterTexels(domain.grid(), result.distances, distances);
@@ -161,6 +162,7 @@ void runGeodesic(GeodesicArgs args) {
         distanceColourMap(domain.grid(), result.distances, result.maxDistance, args.isolines));
     pictureStored = writeImage(args.png, picture, PixelFormat::UInt8);
   }
+  reportProgress(progress, "write", 1.0);
   timer.lap("write");
   printWritten(args.report.quiet, args.out, distances, stored, domain.unknowns(), timer.total());
   if (pictureStored)

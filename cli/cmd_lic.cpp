@@ -41,11 +41,11 @@ void runLic(LicArgs args) {
   args.options.validate();
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   const auto [width, height] = parseResolution(args.resolution);
-  const ProgressCallback progress = terminalProgress(!args.report.quiet);
+  const ProgressCallback progress = progressDisplay(args.report);
+  reportProgress(progress, "read", 0.0);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
-  reportProgress(progress, "lic field", 0.0);
   const FaceVectorField field = loadField(args, mesh);
-  reportProgress(progress, "lic field", 1.0);
+  reportProgress(progress, "read", 1.0);
   timer.lap("read");
   TexelDomain domain(std::move(mesh), width, height, {}, progress);
   timer.lap("operators");
@@ -53,8 +53,10 @@ void runLic(LicArgs args) {
   const LicResult result = lineIntegralConvolution(domain, fieldTexel, args.options, progress);
   timer.lap("solve");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
-  const PixelFormat stored = writeTextureOutput(args.out, domain.mesh(), padded, "baseColor",
-                                                args.bitDepth, args.report.quiet);
+  const PixelFormat stored = runStage(progress, "write", [&] {
+    return writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth,
+                              args.report.quiet);
+  });
   timer.lap("write");
   printWritten(args.report.quiet, args.out, padded, stored, domain.unknowns(), timer.total());
   const bool sharpened = args.options.sharpenBeta != 1.0;

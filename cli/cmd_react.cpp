@@ -48,8 +48,10 @@ void runReact(ReactArgs args) {
   args.options.validate();
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   const auto [width, height] = parseResolution(args.resolution);
-  const ProgressCallback progress = terminalProgress(!args.report.quiet);
+  const ProgressCallback progress = progressDisplay(args.report);
+  reportProgress(progress, "read", 0.0);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  reportProgress(progress, "read", 1.0);
   timer.lap("read");
   const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
                            progress);
@@ -57,8 +59,10 @@ void runReact(ReactArgs args) {
   const ReactionResult result = reactionDiffusion(domain, args.options, args.steps, progress);
   timer.lap("steps");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
-  const PixelFormat stored = writeTextureOutput(args.out, domain.mesh(), padded, "baseColor",
-                                                args.bitDepth, args.report.quiet);
+  const PixelFormat stored = runStage(progress, "write", [&] {
+    return writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth,
+                              args.report.quiet);
+  });
   timer.lap("write");
   printWritten(args.report.quiet, args.out, padded, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();

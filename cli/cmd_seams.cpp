@@ -20,21 +20,26 @@ struct SeamsArgs {
 void runSeams(const SeamsArgs& args) {
   StageTimer timer;
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
+  const ProgressCallback progress = progressDisplay(args.report);
+  reportProgress(progress, "read", 0.0);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
   const Image mask = args.mask.empty() ? Image() : readImage(args.mask);
+  reportProgress(progress, "read", 1.0);
   timer.lap("read");
   const TexelDomain domain(std::move(mesh), texture.width, texture.height,
-                           OperatorOptions::assembledOnce(), terminalProgress(!args.report.quiet));
+                           OperatorOptions::assembledOnce(), progress);
   timer.lap("operators");
-  const SeamsResult result = smoothSeams(domain, texture, mask, args.options);
+  const SeamsResult result = smoothSeams(domain, texture, mask, args.options, progress);
   timer.lap("solve");
   if (result.unanchoredTexels > 0 && !args.report.quiet)
     std::cerr << "texgrad: note: " << result.unanchoredTexels
               << " texels kept as they are: no fixed texel ties them to the rest (charts too "
                  "thin for an interior texel at this resolution, or a mask over whole charts)\n";
-  const PixelFormat stored = writeTextureOutput(args.out, domain.mesh(), result.image, args.slot,
-                                                args.bitDepth, args.report.quiet);
+  const PixelFormat stored = runStage(progress, "write", [&] {
+    return writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth,
+                              args.report.quiet);
+  });
   timer.lap("write");
   printWritten(args.report.quiet, args.out, result.image, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();

@@ -61,6 +61,8 @@ void runStitch(StitchArgs args) {
     throw InvalidInputError(
         "give either --composite with --segments, or --partials with "
         "--confidence");
+  const ProgressCallback progress = progressDisplay(args.report);
+  reportProgress(progress, "read", 0.0);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
   Image composite, segments;
   std::vector<Image> partials, confidences;
@@ -77,16 +79,18 @@ void runStitch(StitchArgs args) {
   }
   if (!args.lock.empty()) args.options.lock = readImage(args.lock);
   const Image& first = compositeMode ? composite : partials.front();
+  reportProgress(progress, "read", 1.0);
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), first.width, first.height, {},
-                           terminalProgress(!args.report.quiet));
+  const TexelDomain domain(std::move(mesh), first.width, first.height, {}, progress);
   timer.lap("operators");
-  const StitchResult result = compositeMode
-                                  ? stitchComposite(domain, composite, segments, args.options)
-                                  : stitchPartials(domain, partials, confidences, args.options);
+  const StitchResult result =
+      compositeMode ? stitchComposite(domain, composite, segments, args.options, progress)
+                    : stitchPartials(domain, partials, confidences, args.options, progress);
   timer.lap("solve");
-  const PixelFormat stored = writeTextureOutput(args.out, domain.mesh(), result.image, "baseColor",
-                                                args.bitDepth, args.report.quiet);
+  const PixelFormat stored = runStage(progress, "write", [&] {
+    return writeTextureOutput(args.out, domain.mesh(), result.image, "baseColor", args.bitDepth,
+                              args.report.quiet);
+  });
   timer.lap("write");
   printWritten(args.report.quiet, args.out, result.image, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();

@@ -76,7 +76,8 @@ void runView(ViewArgs& args) {
   OperatorOptions operatorOptions;
   operatorOptions.keepPieceIntegrals =
       kind != viewer::ViewerAppKind::Geodesic && kind != viewer::ViewerAppKind::React;
-  TexelDomain domain(std::move(mesh), width, height, operatorOptions, terminalProgress(true));
+  TexelDomain domain(std::move(mesh), width, height, operatorOptions,
+                     progressDisplay(ReportArgs{}));
   viewer::ViewerSession session(viewer::makeViewerApp(kind, domain, texture, args.appOptions),
                                 faces, args.session);
   viewer::ViewerServer server(session, domain, args.server);

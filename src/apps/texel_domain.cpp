@@ -16,6 +16,7 @@ TexelDomain::TexelDomain(TexturedMesh mesh, int width, int height, const Operato
   if (grid_.unknownCount() == 0)
     throw InvalidInputError("the atlas covers no texel at " + std::to_string(width) + "x" +
                             std::to_string(height) + "; check the mesh's texture coordinates");
+  reportProgress(progress, "atlas", 1.0);
   operators_ = std::make_unique<TexelOperators>(mesh_, atlas_, grid_, options, progress);
 }
 

@@ -23,6 +23,31 @@ Eigen::RowVectorXd columnDots(const Eigen::MatrixXd& u, const Eigen::MatrixXd& v
   return u.cwiseProduct(v).colwise().sum();
 }
 
+/// Throws NumericalError naming the first NaN or infinity of `m` ("the right-hand side").
+void requireFinite(const Eigen::MatrixXd& m, const std::string& what) {
+  if (m.allFinite()) return;
+  for (Eigen::Index c = 0; c < m.cols(); ++c)
+    for (Eigen::Index i = 0; i < m.rows(); ++i)
+      if (!std::isfinite(m(i, c)))
+        throw NumericalError("conjugateGradient: " + what + " holds " + std::to_string(m(i, c)) +
+                             " at row " + std::to_string(i) + ", column " + std::to_string(c));
+}
+
+/// Throws NumericalError if a curvature p^T A p (or r^T z) of column c at iteration k is NaN, or
+/// is not positive although the direction (or residual) is nonzero: a column that has converged
+/// exactly has p = 0 and a zero curvature, which is fine.
+void requirePositive(double value, bool nonzeroDirection, const char* name, const char* operand,
+                     Eigen::Index c, int k) {
+  if (std::isfinite(value) && (value > 0.0 || (value == 0.0 && !nonzeroDirection))) return;
+  const std::string where = " at iteration " + std::to_string(k + 1) + ", column " +
+                            std::to_string(c) + " (" + name + " = " + std::to_string(value) + ")";
+  if (!std::isfinite(value))
+    throw NumericalError("conjugateGradient: a NaN or infinity arose" + where +
+                         "; the matrix or the preconditioner holds non-finite values");
+  throw NumericalError(std::string("conjugateGradient: ") + operand + " is not positive definite" +
+                       where);
+}
+
 }  // namespace
 
 void CgOptions::validate() const {
@@ -58,6 +83,8 @@ SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen:
                             std::to_string(a.cols()) + ", B has " + std::to_string(b.rows()) +
                             " rows, X is " + std::to_string(x.rows()) + " x " +
                             std::to_string(x.cols()));
+  requireFinite(b, "the right-hand side");
+  requireFinite(x, "the initial guess");
   SolveReport report;
   const double bNorm = b.norm();
   const double scale = bNorm > 0.0 ? 1.0 / bNorm : 1.0;
@@ -75,7 +102,13 @@ SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen:
   precondition();
   p = z;
   Eigen::RowVectorXd rz = columnDots(r, z);
+  for (Eigen::Index c = 0; c < b.cols(); ++c)
+    requirePositive(rz(c), !r.col(c).isZero(0.0), "r^T z", "the preconditioner", c, -1);
   report.residuals.push_back(r.norm() * scale);
+  requireFinite(r, "the residual of the initial guess (A holds non-finite values)");
+  // The iterate with the smallest residual, returned if the residual then diverges.
+  Eigen::MatrixXd best = x;
+  double bestResidual = report.residuals.back();
   while (report.iterations < options.maxIterations && report.residuals.back() > options.tolerance) {
     reportSolveProgress(progress, report, options.maxIterations, options.tolerance);
     start = Clock::now();
@@ -84,7 +117,10 @@ SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen:
     start = Clock::now();
     const Eigen::RowVectorXd pap = columnDots(p, ap);
     Eigen::RowVectorXd alpha(b.cols());
-    for (Eigen::Index c = 0; c < b.cols(); ++c) alpha(c) = pap(c) > 0.0 ? rz(c) / pap(c) : 0.0;
+    for (Eigen::Index c = 0; c < b.cols(); ++c) {
+      requirePositive(pap(c), !p.col(c).isZero(0.0), "p^T A p", "the matrix", c, report.iterations);
+      alpha(c) = pap(c) > 0.0 ? rz(c) / pap(c) : 0.0;
+    }
     x.noalias() += p * alpha.asDiagonal();
     r.noalias() -= ap * alpha.asDiagonal();
     report.rmsChange.push_back((p * alpha.asDiagonal()).norm() /
@@ -94,15 +130,26 @@ SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen:
     start = Clock::now();
     const Eigen::RowVectorXd rzNew = columnDots(r, z);
     for (Eigen::Index c = 0; c < b.cols(); ++c) {
+      requirePositive(rzNew(c), !r.col(c).isZero(0.0), "r^T z", "the preconditioner", c,
+                      report.iterations);
       const double beta = rz(c) > 0.0 ? rzNew(c) / rz(c) : 0.0;
       p.col(c) = z.col(c) + beta * p.col(c);
     }
     rz = rzNew;
     ++report.iterations;
-    report.residuals.push_back(r.norm() * scale);
+    const double residual = r.norm() * scale;
+    report.residuals.push_back(residual);
     report.times.other += secondsSince(start);
+    if (residual < bestResidual) {
+      bestResidual = residual;
+      best = x;
+    } else if (residual > kCgDivergenceGrowth * bestResidual) {
+      x = best;
+      report.diverged = true;
+      break;
+    }
   }
-  report.converged = report.residuals.back() <= options.tolerance;
+  report.converged = !report.diverged && report.residuals.back() <= options.tolerance;
   reportSolveProgress(progress, report, options.maxIterations, options.tolerance, true);
   return report;
 }

@@ -19,7 +19,11 @@ double SolveReport::convergenceFactor(int window) const {
 
 std::string SolveReport::toString() const {
   std::ostringstream os;
-  os << "iterations " << iterations << (converged ? " (converged)" : " (not converged)") << "\n";
+  os << "iterations " << iterations
+     << (converged  ? " (converged)"
+         : diverged ? " (diverged)"
+                    : " (not converged)")
+     << "\n";
   os << std::scientific << std::setprecision(3);
   for (size_t i = 0; i < residuals.size(); ++i) {
     os << "  " << std::setw(3) << i << "  residual " << residuals[i];

@@ -2,9 +2,14 @@
 // image would change, bad output paths refused before any input is read, and one summary line.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+
+#include <chrono>
 #include <cstdint>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -151,7 +156,60 @@ INSTANTIATE_TEST_SUITE_P(Cli, EveryBitDepthCommand,
                                            "mask"),
                          [](const auto& p) { return p.param; });
 
+/// CPU seconds used by the test's finished child processes so far.
+double childCpuSeconds() {
+  rusage usage{};
+  ::getrusage(RUSAGE_CHILDREN, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+/// CPU time a refusal may take: the program's start-up is 0.3 s (`texgrad --version`); processing
+/// the inputs below takes tens of CPU seconds.
+constexpr double kRefusalCpuSeconds = 1.0;
+
+TEST(Cli, RefusesABadOutputInUnderASecondBeforeAnyComputation) {
+  // Real inputs that take seconds to process (1024x1024 operators and solves): the refusal does
+  // not wait for them. CPU time, not wall time: on a loaded machine (load 9 on 2 cores) the
+  // wall time of `texgrad --version` alone reaches 1 s.
+  const auto dir = tempDir("outputs_bad_fast");
+  const std::vector<std::vector<std::string>> commands{
+      {"filter", "builtin:sphere", "-o"},
+      {"geodesic", "builtin:sphere", "-r", "1024", "--source-vertex", "0", "-o"},
+      {"react", "builtin:sphere", "-r", "1024", "-o"}};
+  for (const std::string out : {"out.bmp", "nodir/out.png"})
+    for (std::vector<std::string> args : commands) {
+      args.push_back(args.front() == "geodesic" && out != "out.bmp" ? "nodir/out.exr" : out);
+      const double before = childCpuSeconds();
+      const CliResult r = runCli(args, dir);
+      EXPECT_NE(r.status, 0) << joined(args);
+      EXPECT_EQ(lineCount(r.err), 1) << joined(args) << "\n" << r.err;
+      EXPECT_LT(childCpuSeconds() - before, kRefusalCpuSeconds) << joined(args);
+    }
+}
+
+/// The commands that solve, which all take --progress.
 class EverySolvingCommand : public EveryWritingCommand {};
+
+TEST_P(EverySolvingCommand, ProgressLinesCoverEveryStageToTheWriteWithStepCounts) {
+  // Forced on although stderr is a file: every stage from read to write, a solve (or time
+  // step) stage that counts its steps, the summary last.
+  auto args = commandLine(GetParam(), "inside.obj", out());
+  args.insert(args.end(), {"--progress", "lines"});
+  const CliResult r = runCli(args, dir_);
+  ASSERT_EQ(r.status, 0) << joined(args) << "\n" << r.err;
+  std::vector<std::string> lines;
+  std::istringstream in(r.err);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_GE(lines.size(), 4u) << r.err;
+  EXPECT_EQ(lines.front(), "texgrad: read 0%") << r.err;
+  EXPECT_EQ(lines[lines.size() - 2], "texgrad: write 100%") << r.err;
+  EXPECT_EQ(lines.back().rfind("wrote " + out(), 0), 0u) << r.err;
+  const std::regex counted(R"(texgrad: (.*solve|react) \d+% \(\d+/\d+\))");
+  int countedLines = 0;
+  for (const std::string& line : lines) countedLines += std::regex_match(line, counted);
+  EXPECT_GE(countedLines, 1) << r.err;
+}
 
 TEST_P(EverySolvingCommand, ReportsItsPeakResidentMemory) {
   // Any process that has loaded the library and solved holds more than this resident.
@@ -172,6 +230,43 @@ TEST_P(EverySolvingCommand, ReportsItsPeakResidentMemory) {
 INSTANTIATE_TEST_SUITE_P(Cli, EverySolvingCommand,
                          ::testing::Values("filter", "stitch", "seams", "geodesic", "lic", "react"),
                          [](const auto& p) { return p.param; });
+
+TEST(Cli, ProgressLinesShowTheSolveAdvancingOnANonTerminal) {
+  const auto dir = tempDir("outputs_progress_lines");
+  const std::vector<std::string> args{"filter",      "builtin:aligned-cube",
+                                      "-o",          "f.png",
+                                      "--beta",      "0.3",
+                                      "--solver",    "multigrid",
+                                      "--cycles",    "5",
+                                      "--tolerance", "0",
+                                      "--progress",  "lines"};
+  const CliResult r = runCli(args, dir);
+  ASSERT_EQ(r.status, 0) << r.err;
+  // "texgrad: solve P% (k/5)" for k = 0 .. 5, percentages and counts rising, then the write.
+  const std::regex solveLine(R"(texgrad: solve (\d+)% \((\d+)/5\))");
+  std::istringstream in(r.err);
+  std::vector<int> steps, percents;
+  bool wroteAfterSolve = false;
+  for (std::string line; std::getline(in, line);) {
+    std::smatch m;
+    if (std::regex_match(line, m, solveLine)) {
+      percents.push_back(std::stoi(m[1]));
+      steps.push_back(std::stoi(m[2]));
+    } else if (line == "texgrad: write 100%") {
+      wroteAfterSolve = !steps.empty();
+    }
+  }
+  EXPECT_EQ(steps, (std::vector<int>{0, 1, 2, 3, 4, 5})) << r.err;
+  for (size_t i = 1; i < percents.size(); ++i) EXPECT_GT(percents[i], percents[i - 1]) << r.err;
+  ASSERT_FALSE(percents.empty());
+  EXPECT_EQ(percents.back(), 100);
+  EXPECT_TRUE(wroteAfterSolve) << r.err;
+  // Without --progress a non-terminal gets no progress, only the summary.
+  const std::vector<std::string> plain(args.begin(), args.end() - 2);
+  const CliResult p = runCli(plain, dir);
+  ASSERT_EQ(p.status, 0) << p.err;
+  EXPECT_EQ(lineCount(p.err), 1) << p.err;
+}
 
 TEST(Cli, PeakResidentMemoryExceedsTheInputImage) {
   // The process holds the decoded texture, so its peak is above the image's byte size.

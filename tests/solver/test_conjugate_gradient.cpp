@@ -2,9 +2,13 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/IterativeLinearSolvers>
+#include <cmath>
 #include <cstdio>
+#include <limits>
+#include <string>
 
 #include "synthetic_problem.h"
+#include "texgrad/core/error.h"
 #include "texgrad/solver/cholmod_solver.h"
 #include "texgrad/solver/conjugate_gradient.h"
 
@@ -57,4 +61,87 @@ TEST(ConjugateGradient, MultigridWorksAsEigenPreconditioner) {
   EXPECT_EQ(cg.info(), Eigen::Success);
   EXPECT_LT(cg.iterations(), 30);
   EXPECT_LT((a * x - b).norm() / b.norm(), 1e-7);
+}
+
+namespace {
+
+/// Diagonal n x n matrix with the given entries (both triangles trivially stored).
+Eigen::SparseMatrix<double> diagonal(const Eigen::VectorXd& d) {
+  Eigen::SparseMatrix<double> a(d.size(), d.size());
+  for (Eigen::Index i = 0; i < d.size(); ++i) a.insert(i, i) = d(i);
+  a.makeCompressed();
+  return a;
+}
+
+/// The message of the NumericalError `solve` throws ("" if it throws none).
+template <typename F>
+std::string numericalErrorOf(F&& solve) {
+  try {
+    solve();
+  } catch (const NumericalError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(ConjugateGradient, IndefiniteMatrixIsANumericalErrorNotASilentZeroStep) {
+  // Half the diagonal negative: p^T A p < 0 on the first direction (b = 1).
+  Eigen::VectorXd d = Eigen::VectorXd::Ones(8);
+  d.tail(4).setConstant(-3.0);
+  const Eigen::SparseMatrix<double> a = diagonal(d);
+  const Eigen::MatrixXd b = Eigen::MatrixXd::Ones(8, 2);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(8, 2);
+  const std::string message = numericalErrorOf([&] {
+    conjugateGradient(a, b, x, {}, {50, 1e-10});
+  });
+  EXPECT_NE(message.find("not positive definite at iteration 1, column 0"), std::string::npos)
+      << message;
+  // A Poisson system shifted past its smallest eigenvalues: indefinite, found within the solve.
+  const test::SyntheticProblem p = test::squareProblem(16);
+  const Eigen::SparseMatrix<double> shifted = p.system(-0.05);
+  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(shifted.rows(), 1);
+  const std::string found = numericalErrorOf([&] {
+    conjugateGradient(shifted, test::randomBlock(shifted.rows(), 1, 3), y, {}, {500, 1e-12});
+  });
+  EXPECT_NE(found.find("not positive definite"), std::string::npos) << found;
+}
+
+TEST(ConjugateGradient, NanInTheRightHandSideOrFromThePreconditionerIsANumericalError) {
+  const test::SyntheticProblem p = test::squareProblem(16);
+  const Eigen::SparseMatrix<double> a = p.system(1.0);
+  Eigen::MatrixXd b = test::randomBlock(a.rows(), 2, 4);
+  b(5, 1) = std::numeric_limits<double>::quiet_NaN();
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 2);
+  const std::string message = numericalErrorOf([&] { conjugateGradient(a, b, x, {}, {}); });
+  EXPECT_NE(message.find("right-hand side holds nan at row 5, column 1"), std::string::npos)
+      << message;
+  // A preconditioner that turns to NaN at its third application.
+  b(5, 1) = 0.5;
+  int calls = 0;
+  const Preconditioner poisoned = [&calls](const Eigen::MatrixXd& r, Eigen::MatrixXd& z) {
+    z = r;
+    if (++calls == 3) z(0, 0) = std::numeric_limits<double>::quiet_NaN();
+  };
+  x.setZero();
+  const std::string arose = numericalErrorOf([&] {
+    conjugateGradient(a, b, x, poisoned, {100, 1e-12});
+  });
+  EXPECT_NE(arose.find("a NaN or infinity arose at iteration 2"), std::string::npos) << arose;
+}
+
+TEST(ConjugateGradient, ResidualBlowUpStopsAsDivergedWithTheBestIterate) {
+  // diag(1, -1) with b = (1, 1 - 1e-6): p^T A p = 2e-6 > 0 passes the curvature check, but the
+  // step 1 / 2e-6 multiplies the residual by about 7e5 (indefinite A, not caught by a sign).
+  const Eigen::SparseMatrix<double> a = diagonal(Eigen::Vector2d(1.0, -1.0));
+  const Eigen::MatrixXd b = Eigen::Vector2d(1.0, 1.0 - 1e-6);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(2, 1);
+  const SolveReport report = conjugateGradient(a, b, x, {}, {20, 1e-10});
+  EXPECT_TRUE(report.diverged) << report.toString();
+  EXPECT_FALSE(report.converged);
+  EXPECT_EQ(report.iterations, 1);
+  EXPECT_GT(report.residuals.back(), kCgDivergenceGrowth * report.residuals.front());
+  EXPECT_EQ(x, Eigen::MatrixXd::Zero(2, 1)) << "the best iterate: the initial guess";
+  EXPECT_NE(report.toString().find("(diverged)"), std::string::npos);
 }

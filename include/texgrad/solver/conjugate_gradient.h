@@ -22,8 +22,18 @@ struct CgOptions {
 /// Applies z = M⁻¹ r to an n x k block (M SPD); an empty function means the identity.
 using Preconditioner = std::function<void(const Eigen::MatrixXd& r, Eigen::MatrixXd& z)>;
 
+/// A conjugate-gradient solve stops as diverged once its relative residual exceeds this many
+/// times the smallest it has reached (rounding lets the residual of an SPD system rise a little
+/// between iterations, never by orders of magnitude).
+inline constexpr double kCgDivergenceGrowth = 1e4;
+
 /// Solves A X = B (A n x n SPD with both triangles stored; B, X n x k) by preconditioned CG, one
-/// independent recurrence per column, starting from X. Non-convergence is reported, not thrown.
+/// independent recurrence per column, starting from X. Non-convergence is reported, not thrown;
+/// so is divergence (SolveReport::diverged, kCgDivergenceGrowth), X then holding the iterate
+/// with the smallest residual. Throws NumericalError, naming the iteration and column, if B or X
+/// holds a NaN or infinity, if one appears (in A, or from the preconditioner), or if
+/// p^T A p <= 0 or r^T M^-1 r <= 0 for a nonzero direction (A or the preconditioner is not
+/// positive definite), as the multigrid solver does for a non-positive diagonal.
 /// Reports to `progress` before every iteration and at the end (reportSolveProgress); if it asks
 /// to cancel, throws Cancelled with X holding the last iterate.
 SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,

@@ -27,6 +27,9 @@ struct PhaseTimes {
 struct SolveReport {
   int iterations = 0;           ///< V-cycles or CG iterations performed
   bool converged = false;       ///< true when the requested tolerance was reached
+  /// True when the solve stopped early because its residual grew far above the best it had
+  /// reached (conjugate gradients: kCgDivergenceGrowth); converged is then false.
+  bool diverged = false;
   /// Relative residual ||b - A x||_F / ||b||_F (all channels together); entry 0 is the initial guess.
   std::vector<double> residuals;
   /// Root-mean-square change of x per iteration (over all unknowns and channels).
