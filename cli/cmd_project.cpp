@@ -35,17 +35,19 @@ void runProject(const ProjectArgs& args) {
   std::filesystem::create_directories(args.outDir, ec);
   if (ec) throw IoError("cannot create the output folder '" + args.outDir + "': " + ec.message());
   checkImageOutputArgs(numbered(args.outDir, "partial", 0).string(), "");
-  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  const ProgressCallback progress = progressDisplay(args.report);
+  TexturedMesh mesh =
+      runStage(progress, "read", [&] { return loadMesh(args.mesh, args.weldTolerance); });
   timer.lap("read");
   // Projection reads the basis and S only (surface points, normals): no re-assembly.
   const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
-                           terminalProgress(!args.report.quiet));
+                           progress);
   timer.lap("operators");
   const PhotoProjector projector(domain, args.photos.options);
   timer.lap("surface points");
   nlohmann::json views = nlohmann::json::array();
   int index = 0;
-  projectEachPhoto(projector, cameras, args.photos, args.report.quiet,
+  projectEachPhoto(projector, cameras, args.photos, progress, args.report.quiet,
                    [&](size_t k, PhotoProjection&& view) {
                      const auto partial = numbered(args.outDir, "partial", index);
                      const auto confidence = numbered(args.outDir, "confidence", index);
@@ -70,7 +72,8 @@ void runProject(const ProjectArgs& args) {
          {"views", views},
          {"partials", (std::filesystem::path(args.outDir) / "partial-%02d.png").string()},
          {"confidence", (std::filesystem::path(args.outDir) / "confidence-%02d.png").string()},
-         {"stages", timer.json()}});
+         {"stages", timer.json()},
+         {"peak_rss_bytes", peakResidentBytes()}});
 }
 
 }  // namespace

@@ -31,10 +31,11 @@ void runTexture(TextureArgs args) {
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   const bool best = args.select == "best";
   const std::vector<Camera> cameras = readPhotoCameras(args.photos);
-  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  const ProgressCallback progress = progressDisplay(args.report);
+  TexturedMesh mesh =
+      runStage(progress, "read", [&] { return loadMesh(args.mesh, args.weldTolerance); });
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), width, height, {},
-                           terminalProgress(!args.report.quiet));
+  const TexelDomain domain(std::move(mesh), width, height, {}, progress);
   timer.lap("operators");
   const PhotoProjector projector(domain, args.photos.options);
   timer.lap("surface points");
@@ -43,7 +44,8 @@ void runTexture(TextureArgs args) {
   BestViewComposite composite;
   nlohmann::json views = nlohmann::json::array();
   const int kept = projectEachPhoto(
-      projector, cameras, args.photos, args.report.quiet, [&](size_t k, PhotoProjection&& view) {
+      projector, cameras, args.photos, progress, args.report.quiet,
+      [&](size_t k, PhotoProjection&& view) {
         views.push_back({{"camera", cameras[k].name}, {"seen_texels", view.seenTexels}});
         if (best) {
           composite.add(view, static_cast<int>(views.size()) - 1);
@@ -58,14 +60,16 @@ void runTexture(TextureArgs args) {
                             "coordinate frame");
   timer.lap("project");
   const StitchResult result =
-      best ? stitchComposite(domain, composite.composite, composite.segments, args.stitch)
-           : stitchPartials(domain, partials, confidences, args.stitch);
+      best ? stitchComposite(domain, composite.composite, composite.segments, args.stitch, progress)
+           : stitchPartials(domain, partials, confidences, args.stitch, progress);
   timer.lap("stitch");
   const Image padded =
       dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image, args.dilate);
   timer.lap("dilate");
-  const PixelFormat stored = writeTextureOutput(args.out, domain.mesh(), padded, "baseColor",
-                                                args.bitDepth, args.report.quiet);
+  const PixelFormat stored = runStage(progress, "write", [&] {
+    return writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth,
+                              args.report.quiet);
+  });
   timer.lap("write");
   printWritten(args.report.quiet, args.out, padded, stored, domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();
@@ -77,6 +81,7 @@ void runTexture(TextureArgs args) {
                {"views", views},
                {"solve", toJson(result.report)},
                {"stages", timer.json()},
+               {"peak_rss_bytes", peakResidentBytes()},
                {"output", args.out}});
 }
 

@@ -37,9 +37,8 @@ std::vector<Camera> readPhotoCameras(const PhotoArgs& args) {
 }
 
 int projectEachPhoto(const PhotoProjector& projector, const std::vector<Camera>& cameras,
-                     const PhotoArgs& args, bool quiet,
+                     const PhotoArgs& args, const ProgressCallback& progress, bool quiet,
                      const std::function<void(size_t, PhotoProjection&&)>& sink) {
-  const ProgressCallback progress = terminalProgress(!quiet);
   int kept = 0;
   for (size_t k = 0; k < cameras.size(); ++k) {
     reportProgress(progress, "project",

@@ -25,9 +25,10 @@ std::vector<Camera> readPhotoCameras(const PhotoArgs& args);
 
 /// Projects every camera's photo in turn (one photo in memory) and calls `sink` with the
 /// camera's index and its projection for cameras that see some texel; a camera that sees none
-/// gets a warning line on stderr (unless quiet) and is skipped. Returns the number of views kept.
+/// gets a warning line on stderr (unless quiet) and is skipped. Reports stage "project" to
+/// `progress`. Returns the number of views kept.
 int projectEachPhoto(const PhotoProjector& projector, const std::vector<Camera>& cameras,
-                     const PhotoArgs& args, bool quiet,
+                     const PhotoArgs& args, const ProgressCallback& progress, bool quiet,
                      const std::function<void(size_t, PhotoProjection&&)>& sink);
 
 }  // namespace texgrad::cli
