@@ -65,12 +65,13 @@ SolverSettings solverFrom(SolverSettings defaults, const py::kwargs& keywords) {
 
 py::array filter(const py::handle& target, const py::handle& texture, double alpha, double beta,
                  const py::object& betaMap, std::pair<double, double> betaRange, bool normalMap,
-                 const std::string& basis, double seamWeight, const py::object& dtype,
+                 const std::string& basis, double seamWeight, bool raw, const py::object& dtype,
                  const py::object& progress, const py::kwargs& solver) {
   FilterOptions options;
   options.alpha = alpha;
   options.beta = beta;
   options.normalMap = normalMap;
+  options.rawSolution = raw;
   options.solver = solverFrom(options.solver, solver);
   options.validate();
   ImageArgument input = imageFromArray(texture, "image");
@@ -111,10 +112,11 @@ std::vector<Image> imageList(const py::object& list, const std::string& name) {
 
 py::array stitch(const py::handle& target, const py::object& composite, const py::object& segments,
                  const py::object& partials, const py::object& confidences, const py::object& lock,
-                 double alpha, bool gainCompensation, bool illumination, const py::object& dtype,
-                 const py::object& progress, const py::kwargs& solver) {
+                 double alpha, bool gainCompensation, bool illumination, bool raw,
+                 const py::object& dtype, const py::object& progress, const py::kwargs& solver) {
   StitchOptions options;
   options.alpha = alpha;
+  options.rawSolution = raw;
   options.compensateGains = gainCompensation;
   options.compensateIllumination = illumination;
   // `texgrad stitch`'s solver defaults: 10 V-cycles, or 200 CG iterations.
@@ -150,13 +152,15 @@ py::array stitch(const py::handle& target, const py::object& composite, const py
 }
 
 py::array seams(const py::handle& target, const py::handle& texture, const py::object& mask,
-                const py::object& dtype, const py::object& progress) {
+                bool raw, const py::object& dtype, const py::object& progress) {
+  SeamsOptions options;
+  options.rawSolution = raw;
   ImageArgument input = imageFromArray(texture, "image");
   const Image maskImage = mask.is_none() ? Image() : imageFromArray(mask, "mask").image;
   const auto domain = domainFor(target, input.image.width, input.image.height,
                                 OperatorOptions::assembledOnce(), progress);
   Image output = withProgress(progress, [&](const ProgressCallback& callback) {
-    return smoothSeams(*domain, input.image, maskImage, {}, callback).image;
+    return smoothSeams(*domain, input.image, maskImage, options, callback).image;
   });
   return arrayFromImage(std::move(output), sampleTypeFrom(dtype, input.sampleType), input.planar);
 }
@@ -402,25 +406,28 @@ void registerApps(py::module_& m) {
   m.def("filter", &filter, arg("mesh"), arg("image"), py::kw_only(), arg("alpha") = 1e4,
         arg("beta") = 1.0, arg("beta_map") = none, arg("beta_range") = std::pair(0.0, 2.0),
         arg("normal_map") = false, arg("basis") = "continuous", arg("seam_weight") = 0.0,
-        arg("dtype") = none, arg("progress") = none,
+        arg("raw") = false, arg("dtype") = none, arg("progress") = none,
         "Smooths (beta < 1) or sharpens (beta > 1) an H x W x C image on the surface: "
         "(alpha M + S) x = (alpha M + beta S) x0 (paper Sec. 7.1). `mesh` is a Mesh or a "
         "TexelDomain of the image's size. beta_map: an image (any size) whose brightness sets "
-        "beta per cell over beta_range. Solver keywords as `texgrad filter`'s flags: solver "
+        "beta per cell over beta_range. raw: keep the exact solution at barely covered texels "
+        "(by default clamped into their input's and neighbours' range, as `texgrad filter`). "
+        "Solver keywords as `texgrad filter`'s flags: solver "
         "('multigrid', 'cg', 'direct'), precision, cycles, max_iterations, tolerance, levels, "
         "sweeps, line_ratio, weak_row_reach, threads. Returns the image in its dtype (or dtype).");
   m.def("stitch", &stitch, arg("mesh"), py::kw_only(), arg("composite") = none,
         arg("segments") = none, arg("partials") = none, arg("confidences") = none,
         arg("lock") = none, arg("alpha") = 1e2, arg("gain_compensation") = true,
-        arg("illumination") = true, arg("dtype") = none, arg("progress") = none,
+        arg("illumination") = true, arg("raw") = false, arg("dtype") = none, arg("progress") = none,
         "Stitches textures from several sources (paper Sec. 7.2): a composite with a segments "
         "image (one colour per source, black = none), or lists of partials and confidences "
-        "(channel 0 in [0, 1]); lock: texels (channel 0 > 0.5) kept exactly. Solver keywords as "
+        "(channel 0 in [0, 1]); lock: texels (channel 0 > 0.5) kept exactly; raw as filter's. "
+        "Solver keywords as "
         "`texgrad stitch`'s (10 cycles, 200 CG iterations by default).");
   m.def("seams", &seams, arg("mesh"), arg("image"), py::kw_only(), arg("mask") = none,
-        arg("dtype") = none, arg("progress") = none,
+        arg("raw") = false, arg("dtype") = none, arg("progress") = none,
         "Re-solves the texels along chart boundaries (or under mask, channel 0 > 0.5) for the "
-        "smoothest values given all others (`texgrad seams`).");
+        "smoothest values given all others (`texgrad seams`); raw as filter's.");
   m.def("dilate", &dilate, arg("mesh"), arg("image"), py::kw_only(), arg("radius") = 4,
         arg("infinite") = false, arg("dtype") = none,
         "Fills `radius` rings of gutter texels around the charts (all with infinite=True); "

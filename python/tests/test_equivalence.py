@@ -27,6 +27,29 @@ def test_filter_float_matches_cli(tmp_path, spot_mesh, spot_texture_file):
     assert np.array_equal(result, exr(out)[..., : result.shape[2]])
 
 
+@pytest.mark.parametrize("beta", ["0", "3"])
+def test_filter_raw_matches_cli_raw_and_bound_stays_in_range(tmp_path, spot_mesh,
+                                                             spot_texture_file, beta):
+    # raw=True is `--raw` (the exact solution at barely covered texels); the default clamps those
+    # texels into the range of their input and their well-covered neighbours' solved values, so
+    # where it differs from the raw solution the value lies within the input's and the other
+    # texels' range.
+    out = tmp_path / "raw.exr"
+    run_cli("filter", SPOT, spot_texture_file, "--beta", beta, "--raw", "--out", out,
+            "--bit-depth", "float", "--quiet")
+    image = texgrad.read_image(spot_texture_file, dtype=np.float32)
+    raw = texgrad.filter(spot_mesh, image, beta=float(beta), raw=True)
+    assert np.array_equal(raw, exr(out)[..., : raw.shape[2]])
+    bounded = texgrad.filter(spot_mesh, image, beta=float(beta))
+    changed = np.any(bounded != raw, axis=2)
+    assert changed.any()  # spot at this size has barely covered texels
+    kept = bounded[~changed]
+    low = np.minimum(image.min(axis=(0, 1)), kept.min(axis=0))
+    high = np.maximum(image.max(axis=(0, 1)), kept.max(axis=0))
+    assert np.any(raw[changed] < low) or np.any(raw[changed] > high)  # the raw values were not
+    assert np.all(bounded[changed] >= low) and np.all(bounded[changed] <= high)
+
+
 def test_filter_uint8_matches_cli_png(tmp_path, spot_mesh, spot_texture_file):
     out = tmp_path / "filtered.png"
     run_cli("filter", SPOT, spot_texture_file, "--beta", "2", "--out", out, "--quiet")

@@ -93,7 +93,7 @@ Target = Union[Mesh, TexelDomain]
 def filter(mesh: Target, image: Image, *, alpha: float = 1e4, beta: float = 1.0,
            beta_map: Optional[Image] = None, beta_range: Tuple[float, float] = (0.0, 2.0),
            normal_map: bool = False, basis: str = "continuous", seam_weight: float = 0.0,
-           dtype: DType = None, progress: Progress = None, solver: Optional[str] = None,
+           raw: bool = False, dtype: DType = None, progress: Progress = None, solver: Optional[str] = None,
            precision: Optional[str] = None, cycles: Optional[int] = None,
            max_iterations: Optional[int] = None, tolerance: Optional[float] = None,
            levels: Optional[int] = None, sweeps: Optional[int] = None,
@@ -103,14 +103,14 @@ def stitch(mesh: Target, *, composite: Optional[Image] = None, segments: Optiona
            partials: Optional[Sequence[Image]] = None,
            confidences: Optional[Sequence[Image]] = None, lock: Optional[Image] = None,
            alpha: float = 1e2, gain_compensation: bool = True, illumination: bool = True,
-           dtype: DType = None, progress: Progress = None, solver: Optional[str] = None,
+           raw: bool = False, dtype: DType = None, progress: Progress = None, solver: Optional[str] = None,
            precision: Optional[str] = None, cycles: Optional[int] = None,
            max_iterations: Optional[int] = None, tolerance: Optional[float] = None,
            levels: Optional[int] = None, sweeps: Optional[int] = None,
            line_ratio: Optional[float] = None, weak_row_reach: Optional[int] = None,
            threads: Optional[int] = None) -> Image: ...
-def seams(mesh: Target, image: Image, *, mask: Optional[Image] = None, dtype: DType = None,
-          progress: Progress = None) -> Image: ...
+def seams(mesh: Target, image: Image, *, mask: Optional[Image] = None, raw: bool = False,
+          dtype: DType = None, progress: Progress = None) -> Image: ...
 def dilate(mesh: Target, image: Image, *, radius: int = 4, infinite: bool = False,
            dtype: DType = None) -> Image: ...
 def mask(mesh: Target, resolution: Optional[Resolution] = None, *,
