@@ -60,7 +60,8 @@ def test_scipy_screened_poisson_matches_the_filter(spot_domain, spot_texture_fil
     b = spot_domain.gather(image)
     m, s = spot_domain.mass(), spot_domain.stiffness()
     x = scipy.sparse.linalg.spsolve((alpha * m + s).tocsc(), alpha * (m @ b))
-    filtered = texgrad.filter(spot_domain, image, alpha=alpha, beta=0.0, solver="direct")
+    filtered = texgrad.filter(spot_domain, image, alpha=alpha, beta=0.0, solver="direct",
+                              raw=True)
     # Compared in the M-norm (the L2 norm of the function on the surface) over the texels the
     # image stores: texels whose basis function barely touches the surface (mass 1e-15) are
     # determined only to the system's conditioning, by scipy as by CHOLMOD. The filter returns
