@@ -25,8 +25,11 @@ def test_operators_are_csr_matrices(spot_domain):
 
 def test_stiffness_annihilates_constants(spot_domain):
     s = spot_domain.stiffness()
+    # Measured 4.1e-12 on spot at 256² (the issue asks 1e-12): S's entries reach 2.5e3 at texels
+    # that charts barely cover, so that is the rounding of a row's sum, 8e-16 of the largest row
+    # sum of |S|. The bound allows a few units of that rounding, no more.
     scale = abs(s).sum(axis=1).max()  # largest row sum of |S|: S's size
-    assert np.abs(s @ np.ones(spot_domain.unknowns)).max() <= 1e-12 * scale
+    assert np.abs(s @ np.ones(spot_domain.unknowns)).max() <= 4e-15 * scale
 
 
 def test_mass_integrates_to_the_surface_area(spot_mesh, spot_domain):
