@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # One command on a fresh Debian 12 box (as root): install, build with warnings as errors, and run
-# the fast tests under AddressSanitizer+UBSan, then in Release the solver's fast tests again (its
-# SIMD kernels exist only there), the tests too slow for the sanitizer build (named *Slow*:
-# full-size shared meshes), the malloc tests the sanitizers exclude, and the viewer page's tests,
-# including its end-to-end tests in headless Chromium (CTest ViewerE2E), and the Python module's
-# tests and examples (pytest). Before the last tests,
-# scripts/test-consumers.sh builds an outside project against the installed package three ways
-# (find_package, pkg-config, add_subdirectory of a library-only shared build) and scripts/fuzz.sh
-# fuzzes every file reader and the viewer's message parser (libFuzzer, ASan + UBSan).
+# the fast tests under AddressSanitizer+UBSan; then, in Release, the Python module's tests and
+# examples (pytest), the consumer builds (scripts/test-consumers.sh: an outside project against
+# the installed package by find_package, pkg-config and add_subdirectory of a library-only shared
+# build), the fuzzing of every file reader, the camera files and the viewer's message parser
+# (scripts/fuzz.sh: libFuzzer, ASan + UBSan), the solver's fast tests again (its SIMD kernels
+# exist only there), the tests too slow for the sanitizer build (named *Slow*: full-size shared
+# meshes), the malloc tests the sanitizers exclude, the glTF validator test (npm gltf-validator)
+# and the viewer page's tests, including its end-to-end tests in headless Chromium (ViewerE2E).
 # `ctest --test-dir build/release` afterwards runs the whole suite in Release. --no-label-summary
 # keeps ctest's "tests passed" summary the last thing printed (tests carry module labels).
 set -euo pipefail
