@@ -165,6 +165,25 @@ py::array seams(const py::handle& target, const py::handle& texture, const py::o
   return arrayFromImage(std::move(output), sampleTypeFrom(dtype, input.sampleType), input.planar);
 }
 
+/// Runs `body(mesh, atlas, grid)`, with the GIL released, on the texel grid of `target` at
+/// width x height: a TexelDomain's own, or one built for a Mesh without operators (the apps that
+/// need only the grid: dilate, mask).
+template <typename Body>
+Image onTexelGrid(const py::handle& target, int width, int height, Body&& body) {
+  if (py::isinstance<TexelDomain>(target)) {
+    const auto domain = domainFor(target, width, height, {}, py::none());
+    py::gil_scoped_release release;
+    return body(domain->mesh(), domain->atlas(), domain->grid());
+  }
+  if (!py::isinstance<TexturedMesh>(target))
+    throw py::type_error("mesh must be a texgrad.Mesh or a texgrad.TexelDomain");
+  const auto& mesh = target.cast<const TexturedMesh&>();
+  py::gil_scoped_release release;
+  requireUvsInImage(mesh);
+  const Atlas atlas = buildAtlas(mesh);
+  return body(mesh, atlas, buildTexelGrid(mesh, atlas, width, height));
+}
+
 py::array dilate(const py::handle& target, const py::handle& texture, int radius, bool infinite,
                  const py::object& dtype) {
   DilateOptions options;
@@ -172,21 +191,11 @@ py::array dilate(const py::handle& target, const py::handle& texture, int radius
   options.infinite = infinite;
   options.validate();
   ImageArgument input = imageFromArray(texture, "image");
-  Image output;
-  if (py::isinstance<TexelDomain>(target)) {
-    const auto domain = domainFor(target, input.image.width, input.image.height, {}, py::none());
-    py::gil_scoped_release release;
-    output = dilateGutters(domain->mesh(), domain->atlas(), domain->grid(), input.image, options);
-  } else {
-    if (!py::isinstance<TexturedMesh>(target))
-      throw py::type_error("mesh must be a texgrad.Mesh or a texgrad.TexelDomain");
-    const auto& mesh = target.cast<const TexturedMesh&>();
-    py::gil_scoped_release release;
-    requireUvsInImage(mesh);
-    const Atlas atlas = buildAtlas(mesh);
-    const TexelGrid grid = buildTexelGrid(mesh, atlas, input.image.width, input.image.height);
-    output = dilateGutters(mesh, atlas, grid, input.image, options);
-  }
+  Image output =
+      onTexelGrid(target, input.image.width, input.image.height,
+                  [&](const TexturedMesh& mesh, const Atlas& atlas, const TexelGrid& grid) {
+                    return dilateGutters(mesh, atlas, grid, input.image, options);
+                  });
   return arrayFromImage(std::move(output), sampleTypeFrom(dtype, input.sampleType), input.planar);
 }
 
@@ -194,18 +203,10 @@ py::array mask(const py::handle& target, const py::object& resolution, const std
   const MaskKind maskKind = parseMaskKind(kind);
   const auto [width, height] = sizeFor(target, resolution, {0, 0});
   if (width == 0) throw InvalidInputError("resolution is None; give N or (width, height)");
-  Image output;
-  if (py::isinstance<TexelDomain>(target)) {
-    output = texelMask(target.cast<const TexelDomain&>().grid(), maskKind);
-  } else {
-    if (!py::isinstance<TexturedMesh>(target))
-      throw py::type_error("mesh must be a texgrad.Mesh or a texgrad.TexelDomain");
-    const auto& mesh = target.cast<const TexturedMesh&>();
-    py::gil_scoped_release release;
-    requireUvsInImage(mesh);
-    const Atlas atlas = buildAtlas(mesh);
-    output = texelMask(buildTexelGrid(mesh, atlas, width, height), maskKind);
-  }
+  Image output = onTexelGrid(target, width, height,
+                             [&](const TexturedMesh&, const Atlas&, const TexelGrid& grid) {
+                               return texelMask(grid, maskKind);
+                             });
   return arrayFromImage(std::move(output), SampleType::UInt8, false);
 }
 

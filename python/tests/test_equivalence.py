@@ -141,3 +141,13 @@ def test_atlas_report_matches_info_json(spot_mesh):
     assert {t["slot"]: t["file"] for t in textures} == spot_mesh.textures
     assert expected.pop("missing_files") == []
     assert report == expected
+
+
+def test_mask_and_dilate_on_a_domain_equal_those_on_its_mesh(spot_mesh, spot_domain,
+                                                             spot_texture_file):
+    # A TexelDomain lends its own grid; a Mesh gets one built at the image's size.
+    image = texgrad.read_image(spot_texture_file, dtype=np.float32)
+    assert np.array_equal(texgrad.dilate(spot_domain, image, radius=3),
+                          texgrad.dilate(spot_mesh, image, radius=3))
+    assert np.array_equal(texgrad.mask(spot_domain, kind="chart"),
+                          texgrad.mask(spot_mesh, SIZE, kind="chart"))
