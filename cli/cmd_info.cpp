@@ -8,6 +8,7 @@
 #include "texgrad/atlas/atlas.h"
 #include "texgrad/atlas/atlas_report.h"
 #include "texgrad/atlas/texel_grid.h"
+#include "texgrad/core/path_exists.h"
 #include "texgrad/io/image_io.h"
 
 namespace texgrad::cli {
@@ -97,7 +98,7 @@ bool printTextures(const TexturedMesh& mesh) {
               << (t.faces == 1 ? " face\n" : " faces\n");
   bool missingImage = false;
   for (const TextureRef& t : mesh.textures)
-    if (!t.path.empty() && !std::filesystem::exists(t.path)) {
+    if (!t.path.empty() && !pathExists(t.path)) {
       std::cout << "  warning the " << t.slot << " image " << t.path.string() << " (" << t.origin
                 << ") was not found\n";
       missingImage = true;

@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "texgrad/apps/stitch.h"
 #include "texgrad/core/error.h"
+#include "texgrad/core/path_exists.h"
 #include "texgrad/io/image_io.h"
 
 namespace texgrad::cli {
@@ -31,7 +32,7 @@ std::vector<std::string> expandPattern(const std::string& pattern, const std::st
   for (int k = 0; k < 1000; ++k) {
     std::vector<char> buffer(pattern.size() + 32);
     std::snprintf(buffer.data(), buffer.size(), pattern.c_str(), k);
-    if (!std::filesystem::exists(buffer.data())) {
+    if (!pathExists(buffer.data())) {
       if (k == 0) continue;  // numbering may start at 1
       break;
     }

@@ -15,6 +15,7 @@
 #include "depth_buffer.h"
 #include "texgrad/apps/surface_normals.h"
 #include "texgrad/core/error.h"
+#include "texgrad/core/path_exists.h"
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/image_sampling.h"
 
@@ -198,7 +199,7 @@ PhotoProjection projectPhotoFile(const PhotoProjector& projector, const Camera& 
                                  const std::filesystem::path& masksDir) {
   const Image photo = readImage(camera.imagePath);
   std::optional<Image> mask;
-  if (!masksDir.empty() && std::filesystem::exists(masksDir / camera.name))
+  if (!masksDir.empty() && pathExists(masksDir / camera.name))
     mask = readImage(masksDir / camera.name);
   return projector.project(camera, photo, mask ? &*mask : nullptr);
 }

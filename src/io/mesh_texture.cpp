@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "texgrad/core/error.h"
+#include "texgrad/core/path_exists.h"
 #include "texgrad/io/atomic_file.h"
 #include "texgrad/io/gltf_writer.h"
 #include "texgrad/io/image_io.h"
@@ -49,7 +50,7 @@ std::optional<Image> readMeshTexture(const TexturedMesh& mesh, const std::string
                            "material, or pass the texture to process as an argument");
   }
   const TextureRef* ref = refs.front();
-  if (!ref->path.empty() && !std::filesystem::exists(ref->path))
+  if (!ref->path.empty() && !pathExists(ref->path))
     throw IoError(file + ": " + describe(*ref) + ", the " + slot + " texture, was not found at " +
                   ref->path.string() + "; restore the image file or fix the reference");
   if (!ref->path.empty()) return readImage(ref->path);

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "texgrad/core/error.h"
+#include "texgrad/core/path_exists.h"
 
 namespace texgrad::obj {
 namespace {
@@ -105,7 +106,7 @@ ObjLines scanObjLines(const std::filesystem::path& path) {
       bool found = false;
       std::string names, name;
       while (words >> name) {
-        found = found || std::filesystem::exists(folder / name);
+        found = found || pathExists(folder / name);
         names += (names.empty() ? "'" : ", '") + name + "'";
       }
       if (!found)

@@ -98,6 +98,23 @@ TEST(SilentReads, MissingMtlNamesTheMtllibLine) {
               {"nomtl.obj line 1", "'gone.mtl'", "was not found"});
 }
 
+TEST(SilentReads, OverlongFileNamesInAnObjAreReportedAsNotFound) {
+  // A name longer than the system's limit (NAME_MAX, 255 on Linux) made std::filesystem::exists
+  // throw, which ended the process as an internal error (found by fuzz_obj in CI).
+  const fs::path dir = test::tempDir("silent_long_name");
+  const std::string longName(300, 'a');
+  const TexturedMesh noLibrary =
+      readMesh(fx::write(dir, "longlib.obj", fx::squareObj("mtllib " + longName + ".mtl\n")));
+  ASSERT_EQ(noLibrary.missingFiles.size(), 1u);
+  EXPECT_NE(noLibrary.missingFiles[0].find("was not found"), std::string::npos);
+
+  fx::write(dir, "long.mtl", "newmtl paint\nmap_Kd " + longName + ".png\n");
+  const TexturedMesh mesh =
+      readMesh(fx::write(dir, "longmap.obj", fx::squareObj("mtllib long.mtl\n", "usemtl paint\n")));
+  expectNames(thrown<IoError>([&] { readMeshTexture(mesh, "baseColor"); }),
+              {"longmap.obj", "was not found"});
+}
+
 TEST(SilentReads, MissingGltfImageNamesAssetIndexAndUri) {
   const fs::path dir = test::tempDir("silent_gltf_read");
   const fs::path gltf = fx::write(dir, "m.gltf", fx::triangleGltf("gone.png", "normal.png"));
