@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "texgrad/atlas/atlas.h"
 #include "texgrad/atlas/atlas_report.h"
+#include "texgrad/atlas/atlas_report_json.h"
 #include "texgrad/atlas/texel_grid.h"
 #include "texgrad/core/path_exists.h"
 #include "texgrad/io/image_io.h"
@@ -23,61 +24,12 @@ struct InfoArgs {
   int maxIds = 20;
 };
 
-nlohmann::json atlasJson(const AtlasReport& r) {
-  nlohmann::json j;
-  j["vertices"] = r.vertices;
-  j["uv_vertices"] = r.uvVertices;
-  j["faces"] = r.faces;
-  j["charts"] = r.charts;
-  j["seam_edges"] = r.seamEdges;
-  j["boundary_edges"] = r.boundaryEdges;
-  j["non_manifold_edges"] = r.nonManifoldEdges;
-  j["connected_components"] = r.connectedComponents;
-  j["chart_faces"] = r.chartFaceCounts;
-  j["chart_uv_areas"] = r.chartUvAreas;
-  j["issues"] = nlohmann::json::array();
-  for (const AtlasIssue& issue : r.issues) {
-    j["issues"].push_back({{"kind", issue.kind},
-                           {"meaning", issue.meaning},
-                           {"id_kind", issue.idKind},
-                           {"ids", issue.ids},
-                           {"blocking", issue.blocking}});
-  }
-  if (r.texels) {
-    const TexelStats& t = *r.texels;
-    nlohmann::json tj{{"width", t.width},
-                      {"height", t.height},
-                      {"active", t.active},
-                      {"interior", t.interior},
-                      {"boundary", t.boundary},
-                      {"multi_chart_texels", t.multiChartTexels},
-                      {"texels_outside_image", t.texelsOutsideImage},
-                      {"charts_touching_border", t.chartsTouchingBorder}};
-    tj["min_gutter_texels"] =
-        t.minGutterTexels ? nlohmann::json(*t.minGutterTexels) : nlohmann::json(nullptr);
-    j["texels"] = tj;
-  }
-  return j;
-}
-
 void printIds(const AtlasIssue& issue, int maxIds) {
   std::cout << "    " << issue.idKind << " ids:";
   const size_t shown = std::min(issue.ids.size(), static_cast<size_t>(maxIds));
   for (size_t k = 0; k < shown; ++k) std::cout << " " << issue.ids[k];
   if (issue.ids.size() > shown) std::cout << " ... (" << issue.ids.size() << " in all)";
   std::cout << "\n";
-}
-
-/// The textures the mesh file names (each distinct image per slot) and the files it names that
-/// are missing: reported, not refused, since `info` processes no texture.
-nlohmann::json texturesJson(const TexturedMesh& mesh) {
-  nlohmann::json list = nlohmann::json::array();
-  for (const TextureRef& t : mesh.textures)
-    list.push_back(
-        {{"slot", t.slot},
-         {"file", t.path.empty() ? nlohmann::json(nullptr) : nlohmann::json(t.path.string())},
-         {"named_by", t.origin}});
-  return list;
 }
 
 /// Slots in which the faces use several different images (processing refuses those).
@@ -154,11 +106,7 @@ void runInfo(const InfoArgs& args) {
   }
   const AtlasReport report = analyzeAtlas(mesh, atlas, grid ? &*grid : nullptr);
   if (args.json) {
-    nlohmann::json j = atlasJson(report);
-    j["mesh"] = args.mesh;
-    j["textures"] = texturesJson(mesh);
-    j["missing_files"] = mesh.missingFiles;
-    printJson(j);
+    std::cout << atlasReportJson(report, mesh, args.mesh) << "\n";
   } else {
     printText(args.mesh, report, mesh, args.maxIds);
   }

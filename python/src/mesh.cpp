@@ -10,6 +10,7 @@
 #include "progress.h"
 #include "texgrad/atlas/atlas.h"
 #include "texgrad/atlas/atlas_report.h"
+#include "texgrad/atlas/atlas_report_json.h"
 #include "texgrad/atlas/image_coverage.h"
 #include "texgrad/atlas/texel_grid.h"
 #include "texgrad/core/error.h"
@@ -101,48 +102,7 @@ py::array_t<int32_t> triangleArray(const std::vector<Triangle>& triangles) {
   return out;
 }
 
-/// The atlas report as the dict `texgrad info --json` prints (same keys).
-py::dict reportDict(const AtlasReport& r, const TexturedMesh& mesh) {
-  py::dict d;
-  d["vertices"] = r.vertices;
-  d["uv_vertices"] = r.uvVertices;
-  d["faces"] = r.faces;
-  d["charts"] = r.charts;
-  d["seam_edges"] = r.seamEdges;
-  d["boundary_edges"] = r.boundaryEdges;
-  d["non_manifold_edges"] = r.nonManifoldEdges;
-  d["connected_components"] = r.connectedComponents;
-  d["chart_faces"] = r.chartFaceCounts;
-  d["chart_uv_areas"] = r.chartUvAreas;
-  py::list issues;
-  for (const AtlasIssue& issue : r.issues) {
-    py::dict i;
-    i["kind"] = issue.kind;
-    i["meaning"] = issue.meaning;
-    i["id_kind"] = issue.idKind;
-    i["ids"] = issue.ids;
-    i["blocking"] = issue.blocking;
-    issues.append(i);
-  }
-  d["issues"] = issues;
-  if (r.texels) {
-    const TexelStats& t = *r.texels;
-    py::dict tj;
-    tj["width"] = t.width;
-    tj["height"] = t.height;
-    tj["active"] = t.active;
-    tj["interior"] = t.interior;
-    tj["boundary"] = t.boundary;
-    tj["multi_chart_texels"] = t.multiChartTexels;
-    tj["texels_outside_image"] = t.texelsOutsideImage;
-    tj["charts_touching_border"] = t.chartsTouchingBorder;
-    tj["min_gutter_texels"] = t.minGutterTexels ? py::cast(*t.minGutterTexels) : py::none();
-    d["texels"] = tj;
-  }
-  d["mesh"] = mesh.sourcePath.string();
-  return d;
-}
-
+/// The atlas report as the dict `texgrad info --json` prints (the same JSON, parsed).
 py::dict atlasReport(const TexturedMesh& mesh, const py::object& resolution) {
   std::optional<std::pair<int, int>> size;
   if (!resolution.is_none()) {
@@ -164,7 +124,9 @@ py::dict atlasReport(const TexturedMesh& mesh, const py::object& resolution) {
     if (size) grid = buildTexelGrid(mesh, atlas, size->first, size->second);
     report = analyzeAtlas(mesh, atlas, grid ? &*grid : nullptr);
   }
-  return reportDict(report, mesh);
+  return py::module_::import("json")
+      .attr("loads")(atlasReportJson(report, mesh, mesh.sourcePath.string()))
+      .cast<py::dict>();
 }
 
 PixelFormat formatOf(SampleType type) {
@@ -245,7 +207,7 @@ void registerMesh(py::module_& m) {
           "The mesh's texture in `slot` as an H x W x C array (row 0 = top; float32 in [0, 1] by "
           "default, as texgrad reads it), or None if the file names none.")
       .def("atlas_report", &atlasReport, py::arg("resolution") = py::none(),
-           "The atlas diagnostics as a dict with the keys of `texgrad info --json` (texel "
+           "The atlas diagnostics as the dict `texgrad info --json` prints (texel "
            "statistics too when `resolution` is N or (width, height)).")
       .def_property_readonly("vertex_count",
                              [](const TexturedMesh& mesh) { return mesh.positions.size(); })
