@@ -15,13 +15,18 @@
 
 namespace {
 
-/// A field of /proc/self/status ("VmRSS", "VmHWM") in MB.
-double statusMegabytes(const std::string& field) {
+/// The number a field of /proc/self/status holds ("VmRSS" in kB, "Threads"), or -1.
+double statusValue(const std::string& field) {
   std::ifstream status("/proc/self/status");
   std::string line;
   while (std::getline(status, line))
-    if (line.rfind(field + ":", 0) == 0) return std::stod(line.substr(field.size() + 1)) / 1024.0;
+    if (line.rfind(field + ":", 0) == 0) return std::stod(line.substr(field.size() + 1));
   return -1.0;
+}
+
+/// A field of /proc/self/status ("VmRSS", "VmHWM") in MB.
+double statusMegabytes(const std::string& field) {
+  return statusValue(field) / 1024.0;
 }
 
 /// CPU seconds of the process so far (all threads, user + system).
@@ -68,6 +73,7 @@ int main(int argc, char** argv) {
   std::cout << "], \"cpu_seconds\": [";
   for (size_t k = 0; k < cpu.size(); ++k) std::cout << (k ? ", " : "") << cpu[k];
   std::cout << "], \"rss_before_mb\": " << before << ", \"peak_mb\": " << peak
-            << ", \"unknowns\": " << domain.unknowns() << "}\n";
+            << ", \"unknowns\": " << domain.unknowns()
+            << ", \"threads\": " << statusValue("Threads") << "}\n";
   return 0;
 }

@@ -254,6 +254,45 @@ void scatter(const SparseMatrixd& m, double* values, const int32_t* texels, int 
   }
 }
 
+/// Neumaier's compensated sum of values[begin, end) without values[skip]: within an ulp of the
+/// exact sum, whatever the cancellation (a column of S mixes entries from 1e-15 to 1e3).
+double sumExcept(const double* values, int begin, int end, int skip) {
+  double sum = 0.0, compensation = 0.0;
+  for (int k = begin; k < end; ++k) {
+    if (k == skip) continue;
+    const double next = sum + values[k];
+    compensation +=
+        std::abs(sum) >= std::abs(values[k]) ? (sum - next) + values[k] : (values[k] - next) + sum;
+    sum = next;
+  }
+  return sum + compensation;
+}
+
+/// Sets every diagonal entry of a symmetric matrix with the pattern of `m` to minus the sum of
+/// the other entries of its column, so that the matrix maps constants to zero by construction.
+///
+/// The stiffness is S_h = d^T *1 d (paper Sec. 5.3) with d 1 = 0 because the texel functions are
+/// a partition of unity (Claim 3): S_tt = -sum_{s != t} S_st holds exactly. Summed piece by piece
+/// as integrated, S 1 is off by the rounding of the parts: on a seam piece of a UV sliver with a
+/// stretched metric (spot at 256^2, face 3968: 10 x 0.04 texels in UV, metric anisotropy 268) the
+/// metric factors combine stiffness parts of up to 1e4 into entries of about 1, whose rows vanish
+/// only to 5e-12. Formed here, a row's sum is zero up to one rounding of its diagonal. Every
+/// column with an entry holds its diagonal: a piece adds (t, t) with every (s, t).
+void zeroColumnSums(const SparseMatrixd& m, double* values) {
+  const int* outer = m.outerIndexPtr();
+  const int* inner = m.innerIndexPtr();
+  tbb::parallel_for(tbb::blocked_range<int>(0, static_cast<int>(m.outerSize()), 1 << 12),
+                    [&](const tbb::blocked_range<int>& columns) {
+                      for (int t = columns.begin(); t != columns.end(); ++t) {
+                        const int* diagonal =
+                            std::lower_bound(inner + outer[t], inner + outer[t + 1], t);
+                        if (diagonal == inner + outer[t + 1] || *diagonal != t) continue;
+                        const auto at = static_cast<int>(diagonal - inner);
+                        values[at] = -sumExcept(values, outer[t], outer[t + 1], at);
+                      }
+                    });
+}
+
 }  // namespace
 
 void TexelOperators::Impl::assemble(const std::vector<FaceFactors>& faceFactors, const double* beta,
@@ -298,6 +337,7 @@ void TexelOperators::Impl::assemble(const std::vector<FaceFactors>& faceFactors,
               PackedSymmetric{combined.data()}, cellBeta(sp.cellX, sp.cellY));
     }
   }
+  if (stiffnessOut) zeroColumnSums(mass, stiffnessOut);
 }
 
 TexelOperators::TexelOperators(const TexturedMesh& mesh, const Atlas& atlas,

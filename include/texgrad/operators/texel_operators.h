@@ -101,10 +101,10 @@ class TexelOperators {
   /// Mass matrix M = *0 (|T| x |T|, SPD): M_st = int sqrt|g| phi_s phi_t (paper Sec. 5.2);
   /// units of surface area (1^T M 1 = surface area, 1 for the immersion metric).
   const SparseMatrixd& mass() const;
-  /// Stiffness matrix S (|T| x |T|, symmetric PSD, S 1 = 0): S_st = int sqrt|g| g^-1(dphi_s,
-  /// dphi_t) (paper Sec. 5.3 footnote 5); positive diagonal (the negative of a Laplacian). A view
-  /// on mass()'s sparsity pattern with S's own values (one index array for both matrices); valid
-  /// while this object lives, and setMetric() changes the values it shows in place.
+  /// Stiffness matrix S (|T| x |T|, symmetric PSD): S_st = int sqrt|g| g^-1(dphi_s, dphi_t) (paper
+  /// Sec. 5.3 footnote 5), S_tt = -sum_{s != t} S_st so S 1 = 0 (rounding only); the negative of a
+  /// Laplacian. A view on mass()'s pattern with S's own values (one index array for both
+  /// matrices); valid while this object lives, and setMetric() changes the values in place.
   SparseViewd stiffness() const;
   /// Seam-continuity matrix C (|T| x |T|, symmetric PSD): x^T C x = E_C = integral over the
   /// seams of (f_side0 - f_side1)^2 with respect to surface length under the current metric
