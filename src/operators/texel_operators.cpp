@@ -379,13 +379,16 @@ SparseViewd TexelOperators::stiffness() const {
   return SparseViewd(m.rows(), m.cols(), m.nonZeros(), m.outerIndexPtr(), m.innerIndexPtr(),
                      impl_->stiffnessValues.data());
 }
-const SparseMatrixd& TexelOperators::seamContinuity() const { return impl_->seamContinuity; }
+const SparseMatrixd& TexelOperators::seamContinuity() const {
+  return impl_->continuityMatrix();
+}
 const fem::TexelBasis& TexelOperators::basis() const { return impl_->basis; }
 const OperatorReport& TexelOperators::report() const { return impl_->report; }
 
 int64_t TexelOperators::storageBytes() const {
   const Impl& m = *impl_;
   return sparseStorageBytes(m.mass) + sparseStorageBytes(m.seamContinuity) +
+         sparseStorageBytes(m.zeroContinuity) +
          capacityBytes(m.stiffnessValues, m.seamValues, m.fullBandBegin, m.partialBandBegin,
                        m.seamTexels, m.cellCovered, m.metric, m.factors, m.full, m.partial, m.seam);
 }
