@@ -73,7 +73,6 @@ struct TexelOperators::Impl {
   std::vector<double> seamValues;
   std::vector<int64_t> fullBandBegin, partialBandBegin;
   int bandCount = 0;
-  std::vector<uint8_t> cellCovered;  ///< per grid cell: some piece has positive area
   bool piecesReleased = false;       ///< releasePieces() ran: no re-assembly possible
   SparseMatrixd mass;  ///< M; its index arrays are the pattern of every assembled matrix
   std::vector<double> stiffnessValues;  ///< S on mass's pattern (TexelOperators::stiffness())
