@@ -256,7 +256,7 @@ void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRow
   system.interiorUnknowns.reserve(interiorCount);
   for (int u = 0; u < n; ++u) {
     const size_t su = static_cast<size_t>(u);
-    const int64_t slot = level.slotOfUnknown[su];
+    const int32_t slot = level.slotOfUnknown[su];
     if (interior[su]) {
       system.kind[static_cast<size_t>(slot)] = SlotKind::Interior;
       system.interiorUnknowns.push_back(u);
@@ -266,11 +266,31 @@ void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRow
       system.boundarySlots.push_back(slot);
     }
   }
+  system.interiorTotal = static_cast<int>(interiorCount);
   collectRows(level, system);
   system.nonZeros = pattern.nonZeros();
   const Eigen::SparseMatrix<double> bb = boundaryBlock(level, pattern, system);
   system.boundaryNonZeros = bb.nonZeros();
   if (system.boundaryCount() > 0) system.boundarySolver.analyzePattern(bb);
+}
+
+void indexUnknowns(const GridLevel& level, LevelSystem& system) {
+  const int n = level.unknownCount();
+  if (system.boundaryOfUnknown.size() == static_cast<size_t>(n)) return;
+  system.boundaryOfUnknown.assign(static_cast<size_t>(n), -1);
+  for (int j = 0; j < system.boundaryCount(); ++j)
+    system.boundaryOfUnknown[static_cast<size_t>(unknownOfBoundary(level, system, j))] = j;
+  system.interiorUnknowns.clear();
+  system.interiorUnknowns.reserve(static_cast<size_t>(system.interiorTotal));
+  for (int u = 0; u < n; ++u)
+    if (system.kind[static_cast<size_t>(level.slotOfUnknown[static_cast<size_t>(u)])] ==
+        SlotKind::Interior)
+      system.interiorUnknowns.push_back(u);
+}
+
+void releaseUnknownIndex(LevelSystem& system) {
+  std::vector<int32_t>().swap(system.boundaryOfUnknown);
+  std::vector<int32_t>().swap(system.interiorUnknowns);
 }
 
 void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system) {
