@@ -51,7 +51,7 @@ void addSeam(const fem::TexelBasis& basis, const fem::SeamTrace& seam, double le
 
 void TexelOperators::Impl::buildSeamContinuity() {
   // The seam-continuous basis has no jumps: C = 0 is formed only when asked for
-  // (zeroSeamContinuity), as even an empty n x n matrix holds n + 1 column starts.
+  // (continuityMatrix), as even an empty n x n matrix holds n + 1 column starts.
   if (options.basis != fem::BasisKind::Bilinear) return;
   const int n = basis.grid().unknownCount();
   seamContinuity.resize(n, n);
