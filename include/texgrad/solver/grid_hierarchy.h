@@ -44,7 +44,7 @@ struct LatticePoint {
 /// Texels of one level. Level-l lattice position (x, y) is fine grid texel (2^l x, 2^l y); the
 /// chart origin of every chart is grid texel (0, 0). Unknowns are numbered as in the TexelGrid at
 /// level 0 and in slot order at coarser levels. Per unknown only its slot is stored; its box,
-/// chart and position follow from the slot (docs/memory.md: 12 bytes per unknown fewer).
+/// chart and position follow from the slot (docs/memory.md: 16 bytes per unknown fewer).
 struct GridLevel {
   std::vector<GridBox> boxes;          ///< one box per chart present, in increasing offset
   std::vector<int32_t> boxOfChart;     ///< per chart: index into boxes, -1 if absent
