@@ -50,10 +50,12 @@ void addSeam(const fem::TexelBasis& basis, const fem::SeamTrace& seam, double le
 }  // namespace
 
 void TexelOperators::Impl::buildSeamContinuity() {
+  // The seam-continuous basis has no jumps: C = 0 is formed only when asked for
+  // (continuityMatrix), as even an empty n x n matrix holds n + 1 column starts.
+  if (options.basis != fem::BasisKind::Bilinear) return;
   const int n = basis.grid().unknownCount();
   seamContinuity.resize(n, n);
   seamContinuity.setZero();
-  if (options.basis != fem::BasisKind::Bilinear) return;
   std::vector<Eigen::Triplet<double>> triplets;
   for (int s = 0; s < basis.seamCount(); ++s) {
     const fem::SeamTrace trace = basis.seamTrace(s);
@@ -62,6 +64,15 @@ void TexelOperators::Impl::buildSeamContinuity() {
     addSeam(basis, trace, length, triplets);
   }
   seamContinuity.setFromTriplets(triplets.begin(), triplets.end());
+}
+
+const SparseMatrixd& TexelOperators::Impl::continuityMatrix() const {
+  if (options.basis == fem::BasisKind::Bilinear) return seamContinuity;
+  std::call_once(zeroContinuityFormed, [&] {
+    const int n = basis.grid().unknownCount();
+    zeroContinuity.resize(n, n);
+  });
+  return zeroContinuity;
 }
 
 }  // namespace texgrad

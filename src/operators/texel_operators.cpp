@@ -174,7 +174,7 @@ void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
 
 void TexelOperators::Impl::buildPattern() {
   const TexelGrid& grid = basis.grid();
-  cellCovered.assign(static_cast<size_t>(grid.nx + 1) * (grid.ny + 1), 0);
+  std::vector<uint8_t> cellCovered(static_cast<size_t>(grid.nx + 1) * (grid.ny + 1), 0);
   auto mark = [&](const auto& pieces) {
     for (const auto& p : pieces) cellCovered[grid.cellIndex(p.cellX, p.cellY)] = 1;
   };
@@ -190,46 +190,51 @@ void TexelOperators::Impl::buildPattern() {
   tbb::parallel_sort(extra.begin(), extra.end());
   extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
   const int n = grid.unknownCount();
-  // Columns in blocks of unknowns on all cores, each block into its own buffer, then one copy.
+  // Column u: the texels of the covered cells around texel u and u's seam pairs, sorted.
+  using Extra = std::vector<std::pair<int32_t, int32_t>>::const_iterator;
+  auto columnOf = [&](int u, Extra& e, std::vector<int32_t>& column) {
+    column.clear();
+    const int t = grid.texelOfUnknown[u];
+    const int x = t % grid.nx, y = t / grid.nx;
+    for (int b = y - 1; b <= y; ++b)
+      for (int a = x - 1; a <= x; ++a) {
+        if (!cellCovered[grid.cellIndex(a, b)]) continue;
+        for (int32_t v : basis.cellTexels(a, b))
+          if (v >= 0) column.push_back(v);
+      }
+    for (; e != extra.cend() && e->first == u; ++e) column.push_back(e->second);
+    std::sort(column.begin(), column.end());
+    column.erase(std::unique(column.begin(), column.end()), column.end());
+  };
+  // Blocks of unknowns on all cores, twice: count each column into M's column starts, then
+  // write it straight into M's index array (no per-block copies: docs/memory.md).
   constexpr int kBlock = 1 << 14;
   const int blocks = (n + kBlock - 1) / kBlock;
-  std::vector<std::vector<int32_t>> blockInner(static_cast<size_t>(blocks));
-  std::vector<int32_t> columnSize(static_cast<size_t>(n), 0);
-  tbb::parallel_for(0, blocks, [&](int block) {
-    const int first = block * kBlock, last = std::min(n, first + kBlock);
-    std::vector<int32_t>& out = blockInner[static_cast<size_t>(block)];
-    out.reserve(static_cast<size_t>(last - first) * 9);
-    auto e =
-        std::lower_bound(extra.begin(), extra.end(),
-                         std::pair<int32_t, int32_t>(first, std::numeric_limits<int32_t>::min()));
-    std::vector<int32_t> column;
-    for (int u = first; u < last; ++u) {
-      column.clear();
-      const int t = grid.texelOfUnknown[u];
-      const int x = t % grid.nx, y = t / grid.nx;
-      for (int b = y - 1; b <= y; ++b)
-        for (int a = x - 1; a <= x; ++a) {
-          if (!cellCovered[grid.cellIndex(a, b)]) continue;
-          for (int32_t v : basis.cellTexels(a, b))
-            if (v >= 0) column.push_back(v);
-        }
-      for (; e != extra.end() && e->first == u; ++e) column.push_back(e->second);
-      std::sort(column.begin(), column.end());
-      column.erase(std::unique(column.begin(), column.end()), column.end());
-      out.insert(out.end(), column.begin(), column.end());
-      columnSize[static_cast<size_t>(u)] = static_cast<int32_t>(column.size());
-    }
-  });
+  auto forEachColumn = [&](const auto& use) {
+    tbb::parallel_for(0, blocks, [&](int block) {
+      const int first = block * kBlock, last = std::min(n, first + kBlock);
+      Extra e =
+          std::lower_bound(extra.cbegin(), extra.cend(),
+                           std::pair<int32_t, int32_t>(first, std::numeric_limits<int32_t>::min()));
+      std::vector<int32_t> column;
+      for (int u = first; u < last; ++u) {
+        columnOf(u, e, column);
+        use(u, column);
+      }
+    });
+  };
   // The mass matrix holds the shared pattern (no separate copy: it is the largest structure).
   mass.resize(n, n);
   int* outer = mass.outerIndexPtr();
+  forEachColumn([&](int u, const std::vector<int32_t>& column) {
+    outer[u + 1] = static_cast<int>(column.size());
+  });
   outer[0] = 0;
-  for (int u = 0; u < n; ++u) outer[u + 1] = outer[u] + columnSize[static_cast<size_t>(u)];
+  for (int u = 0; u < n; ++u) outer[u + 1] += outer[u];
   mass.resizeNonZeros(outer[n]);
-  tbb::parallel_for(0, blocks, [&](int block) {
-    const std::vector<int32_t>& in = blockInner[static_cast<size_t>(block)];
-    std::copy(in.begin(), in.end(), mass.innerIndexPtr() + outer[block * kBlock]);
-    std::fill_n(mass.valuePtr() + outer[block * kBlock], in.size(), 0.0);
+  forEachColumn([&](int u, const std::vector<int32_t>& column) {
+    std::copy(column.begin(), column.end(), mass.innerIndexPtr() + outer[u]);
+    std::fill_n(mass.valuePtr() + outer[u], column.size(), 0.0);
   });
 }
 
@@ -419,15 +424,18 @@ SparseViewd TexelOperators::stiffness() const {
   return SparseViewd(m.rows(), m.cols(), m.nonZeros(), m.outerIndexPtr(), m.innerIndexPtr(),
                      impl_->stiffnessValues.data());
 }
-const SparseMatrixd& TexelOperators::seamContinuity() const { return impl_->seamContinuity; }
+const SparseMatrixd& TexelOperators::seamContinuity() const {
+  return impl_->continuityMatrix();
+}
 const fem::TexelBasis& TexelOperators::basis() const { return impl_->basis; }
 const OperatorReport& TexelOperators::report() const { return impl_->report; }
 
 int64_t TexelOperators::storageBytes() const {
   const Impl& m = *impl_;
   return sparseStorageBytes(m.mass) + sparseStorageBytes(m.seamContinuity) +
+         sparseStorageBytes(m.zeroContinuity) +
          capacityBytes(m.stiffnessValues, m.seamValues, m.fullBandBegin, m.partialBandBegin,
-                       m.seamTexels, m.cellCovered, m.metric, m.factors, m.full, m.partial, m.seam);
+                       m.seamTexels, m.metric, m.factors, m.full, m.partial, m.seam);
 }
 
 SparseMatrixd TexelOperators::screenedSystem(double alpha) const {

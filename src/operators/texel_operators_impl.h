@@ -3,6 +3,7 @@
 #pragma once
 
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "piece_integrals.h"
@@ -38,8 +39,12 @@ struct TexelOperators::Impl {
 
   void integratePieces(const ProgressCallback& progress);
   void buildPattern();
-  /// C of the soft seam-continuity energy (zero for the seam-continuous basis).
+  /// C of the soft seam-continuity energy for the bilinear basis (none for the seam-continuous
+  /// basis).
   void buildSeamContinuity();
+  /// C: seamContinuity for the bilinear basis; for the seam-continuous basis an all-zero matrix,
+  /// formed on the first call.
+  const SparseMatrixd& continuityMatrix() const;
   /// Metric factors of every face for a per-face metric; throws InvalidInputError, naming
   /// `caller`, unless there is one SPD matrix per face.
   std::vector<FaceFactors> factorsOf(const std::vector<Eigen::Matrix2d>& faceMetric,
@@ -68,11 +73,12 @@ struct TexelOperators::Impl {
   std::vector<double> seamValues;
   std::vector<int64_t> fullBandBegin, partialBandBegin;
   int bandCount = 0;
-  std::vector<uint8_t> cellCovered;  ///< per grid cell: some piece has positive area
   bool piecesReleased = false;       ///< releasePieces() ran: no re-assembly possible
   SparseMatrixd mass;  ///< M; its index arrays are the pattern of every assembled matrix
   std::vector<double> stiffnessValues;  ///< S on mass's pattern (TexelOperators::stiffness())
-  SparseMatrixd seamContinuity;  ///< E_C(x) = x^T C x (paper Sec. 4.2)
+  SparseMatrixd seamContinuity;         ///< E_C(x) = x^T C x (paper Sec. 4.2); bilinear basis only
+  mutable std::once_flag zeroContinuityFormed;
+  mutable SparseMatrixd zeroContinuity;  ///< C = 0 of the seam-continuous basis, once asked for
 };
 
 }  // namespace texgrad

@@ -22,7 +22,9 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 struct CholmodSolver::Impl {
   mutable cholmod_common common{};
   cholmod_factor* factor = nullptr;
-  // Lower triangle of the analysed / factorised matrix in CSC form (CHOLMOD_INT indices).
+  // Lower triangle of the analysed / factorised matrix in CSC form (CHOLMOD_INT indices). The
+  // pattern stays to tell whether the next matrix needs a new analysis; the values are freed once
+  // analysed or factorised (every entry point loads them again first).
   std::vector<int> colPtr, rowIdx;
   std::vector<double> values;
   int n = 0;
@@ -145,12 +147,14 @@ CholmodSolver& CholmodSolver::operator=(CholmodSolver&&) noexcept = default;
 void CholmodSolver::analyzePattern(const Eigen::SparseMatrix<double>& a) {
   impl_->loadLower(a);
   impl_->analyse();
+  std::vector<double>().swap(impl_->values);
 }
 
 void CholmodSolver::factorize(const Eigen::SparseMatrix<double>& a) {
   const bool same = impl_->loadLower(a);
   if (!impl_->analysed || !same) impl_->analyse();
   impl_->factorise();
+  std::vector<double>().swap(impl_->values);
 }
 
 CholmodSolver& CholmodSolver::compute(const Eigen::SparseMatrix<double>& a) {

@@ -153,10 +153,9 @@ Sparse galerkinProduct(const SparseSum& a, const GridLevel& fine, const GridLeve
       [&](Eigen::Index j, std::vector<std::pair<int, double>>& out) {
         // The fine texels within one lattice step of coarse texel j's position, in its chart.
         out.clear();
-        const size_t sj = static_cast<size_t>(j);
-        const GridBox& box = fine.boxes[static_cast<size_t>(
-            fine.boxOfChart[static_cast<size_t>(coarse.chartOfUnknown[sj])])];
-        const int x = coarse.xOfUnknown[sj], y = coarse.yOfUnknown[sj];
+        const LatticePoint p = coarse.point(static_cast<int>(j));
+        const GridBox& box = fine.boxOfChartAt(coarse.boxes[static_cast<size_t>(p.box)].chart);
+        const int x = p.x, y = p.y;
         for (int fy = 2 * y - 1; fy <= 2 * y + 1; ++fy)
           for (int fx = 2 * x - 1; fx <= 2 * x + 1; ++fx) {
             if (!box.contains(fx, fy)) continue;
@@ -168,11 +167,9 @@ Sparse galerkinProduct(const SparseSum& a, const GridLevel& fine, const GridLeve
         std::sort(out.begin(), out.end());  // by fine index, as in P's column, for any numbering
       },
       [&](int r, const auto& add) {
-        const size_t sr = static_cast<size_t>(r);
-        const GridBox& box = coarse.boxes[static_cast<size_t>(
-            coarse.boxOfChart[static_cast<size_t>(fine.chartOfUnknown[sr])])];
-        const LatticeParents px = latticeParents(fine.xOfUnknown[sr]),
-                             py = latticeParents(fine.yOfUnknown[sr]);
+        const LatticePoint p = fine.point(r);
+        const GridBox& box = coarse.boxOfChartAt(fine.boxes[static_cast<size_t>(p.box)].chart);
+        const LatticeParents px = latticeParents(p.x), py = latticeParents(p.y);
         for (int jy = 0; jy < py.count; ++jy)  // slot order = increasing coarse index
           for (int ix = 0; ix < px.count; ++ix) {
             const size_t x = static_cast<size_t>(ix), y = static_cast<size_t>(jy);

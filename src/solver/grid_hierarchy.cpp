@@ -32,6 +32,9 @@ void layoutBoxes(GridLevel& level, const std::vector<std::array<int, 4>>& bounds
     level.boxOfChart[c] = static_cast<int32_t>(level.boxes.size());
     level.boxes.push_back(box);
   }
+  if (offset > std::numeric_limits<int32_t>::max())
+    throw InvalidInputError("GridHierarchy: a level needs " + std::to_string(offset) +
+                            " slots, more than 2^31 - 1");
   level.slotCount = offset;
   level.unknownOfSlot.assign(static_cast<size_t>(offset), -1);
 }
@@ -48,18 +51,12 @@ void growBounds(std::array<int, 4>& b, int x, int y) {
 /// Sizes the per-unknown arrays for `n` unknowns up front (no growth slack stays allocated).
 void reserveUnknowns(GridLevel& level, size_t n) {
   level.slotOfUnknown.reserve(n);
-  level.chartOfUnknown.reserve(n);
-  level.xOfUnknown.reserve(n);
-  level.yOfUnknown.reserve(n);
   level.footprintInterior.reserve(n);
 }
 
-void pushUnknown(GridLevel& level, int64_t slot, int chart, int x, int y, bool interior) {
+void pushUnknown(GridLevel& level, int64_t slot, bool interior) {
   level.unknownOfSlot[static_cast<size_t>(slot)] = level.unknownCount();
-  level.slotOfUnknown.push_back(slot);
-  level.chartOfUnknown.push_back(chart);
-  level.xOfUnknown.push_back(x);
-  level.yOfUnknown.push_back(y);
+  level.slotOfUnknown.push_back(static_cast<int32_t>(slot));  // < 2^31: layoutBoxes checks
   level.footprintInterior.push_back(interior ? 1 : 0);
 }
 
@@ -78,7 +75,7 @@ GridLevel buildFinestLevel(const TexelGrid& grid, int chartCount) {
     const int chart = grid.texelChart[t];
     const int x = static_cast<int>(t) % grid.nx, y = static_cast<int>(t) / grid.nx;
     const GridBox& box = level.boxes[static_cast<size_t>(level.boxOfChart[static_cast<size_t>(chart)])];
-    pushUnknown(level, box.slot(x, y), chart, x, y, grid.texelClass[t] == TexelClass::Interior);
+    pushUnknown(level, box.slot(x, y), grid.texelClass[t] == TexelClass::Interior);
   }
   return level;
 }
@@ -95,11 +92,9 @@ GridLevel buildCoarseLevel(const GridLevel& fine) {
   layoutBoxes(coarse, bounds);
   std::vector<uint8_t> used(static_cast<size_t>(coarse.slotCount), 0);
   for (int u = 0; u < fine.unknownCount(); ++u) {
-    const size_t su = static_cast<size_t>(u);
-    const GridBox& box = coarse.boxes[static_cast<size_t>(
-        coarse.boxOfChart[static_cast<size_t>(fine.chartOfUnknown[su])])];
-    const LatticeParents px = latticeParents(fine.xOfUnknown[su]),
-                         py = latticeParents(fine.yOfUnknown[su]);
+    const LatticePoint p = fine.point(u);
+    const GridBox& box = coarse.boxOfChartAt(fine.boxes[static_cast<size_t>(p.box)].chart);
+    const LatticeParents px = latticeParents(p.x), py = latticeParents(p.y);
     for (int j = 0; j < py.count; ++j)
       for (int i = 0; i < px.count; ++i)
         used[static_cast<size_t>(box.slot(px.index[static_cast<size_t>(i)],
@@ -121,7 +116,7 @@ GridLevel buildCoarseLevel(const GridLevel& fine) {
                                : -1;
             interior = fu >= 0 && fine.footprintInterior[static_cast<size_t>(fu)];
           }
-        pushUnknown(coarse, s, box.chart, x, y, interior);
+        pushUnknown(coarse, s, interior);
       }
     }
   }
@@ -137,20 +132,17 @@ Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridL
   std::vector<int> start(static_cast<size_t>(n) + 1, 0);
   for (int u = 0; u < n; ++u) {
     const size_t su = static_cast<size_t>(u);
-    start[su + 1] =
-        start[su] + latticeParents(fine.xOfUnknown[su]).count *
-                        latticeParents(fine.yOfUnknown[su]).count;
+    const LatticePoint p = fine.point(u);
+    start[su + 1] = start[su] + latticeParents(p.x).count * latticeParents(p.y).count;
   }
   rows.resizeNonZeros(start.back());
   std::copy(start.begin(), start.end(), rows.outerIndexPtr());
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
     for (int u = r.begin(); u != r.end(); ++u) {
-      const size_t su = static_cast<size_t>(u);
-      const GridBox& box = coarse.boxes[static_cast<size_t>(
-          coarse.boxOfChart[static_cast<size_t>(fine.chartOfUnknown[su])])];
-      const LatticeParents px = latticeParents(fine.xOfUnknown[su]),
-                         py = latticeParents(fine.yOfUnknown[su]);
-      int k = start[su];
+      const LatticePoint p = fine.point(u);
+      const GridBox& box = coarse.boxOfChartAt(fine.boxes[static_cast<size_t>(p.box)].chart);
+      const LatticeParents px = latticeParents(p.x), py = latticeParents(p.y);
+      int k = start[static_cast<size_t>(u)];
       for (int j = 0; j < py.count; ++j)  // slot order = increasing coarse index
         for (int i = 0; i < px.count; ++i, ++k) {
           const int64_t slot =
@@ -165,6 +157,17 @@ Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridL
 }
 
 }  // namespace
+
+LatticePoint GridLevel::pointOfSlot(int64_t s) const {
+  // The boxes' slot ranges are consecutive: the box of s is the last one starting at or before s.
+  const auto after =
+      std::upper_bound(boxes.begin(), boxes.end(), s,
+                       [](int64_t slot, const GridBox& b) { return slot < b.offset; });
+  const GridBox& box = *(after - 1);
+  const int64_t local = s - box.offset;
+  return {static_cast<int>(after - 1 - boxes.begin()), box.x0 + static_cast<int>(local % box.width),
+          box.y0 + static_cast<int>(local / box.width)};
+}
 
 GridHierarchy GridHierarchy::build(const TexelGrid& grid, int maxLevels, int minCoarseUnknowns) {
   if (maxLevels < 0)
@@ -205,8 +208,8 @@ Eigen::SparseMatrix<double> GridHierarchy::prolongation(int l) const {
 int64_t GridHierarchy::storageBytes() const {
   int64_t bytes = capacityBytes(levels_);
   for (const GridLevel& g : levels_)
-    bytes += capacityBytes(g.boxes, g.boxOfChart, g.unknownOfSlot, g.slotOfUnknown,
-                           g.chartOfUnknown, g.xOfUnknown, g.yOfUnknown, g.footprintInterior);
+    bytes +=
+        capacityBytes(g.boxes, g.boxOfChart, g.unknownOfSlot, g.slotOfUnknown, g.footprintInterior);
   return bytes;
 }
 

@@ -15,30 +15,44 @@
 namespace texgrad::detail {
 namespace {
 
-/// Stencil index of the entry (u, v), or -1 when v is not a 3 x 3 lattice neighbour of u in u's chart.
-int stencilIndex(const GridLevel& level, int u, int v) {
-  const size_t su = static_cast<size_t>(u), sv = static_cast<size_t>(v);
-  if (level.chartOfUnknown[su] != level.chartOfUnknown[sv]) return -1;
-  const int dx = level.xOfUnknown[sv] - level.xOfUnknown[su];
-  const int dy = level.yOfUnknown[sv] - level.yOfUnknown[su];
-  if (std::abs(dx) > 1 || std::abs(dy) > 1) return -1;
-  return (dy + 1) * 3 + (dx + 1);
-}
+/// The 3 x 3 lattice neighbourhood of one unknown within its box (so within its chart).
+class Neighbourhood {
+ public:
+  Neighbourhood(const GridLevel& level, int u)
+      : level_(level), point_(level.point(u)), box_(level.boxes[static_cast<size_t>(point_.box)]) {}
+  /// Stencil index of unknown v, (dy + 1) * 3 + (dx + 1), or -1 when v is not a 3 x 3 lattice
+  /// neighbour in the same chart (a slot outside the box belongs to another chart's box).
+  int stencilIndex(int v) const {
+    const int64_t local = level_.slotOfUnknown[static_cast<size_t>(v)] - box_.offset;
+    if (local < 0 || local >= static_cast<int64_t>(box_.width) * box_.height) return -1;
+    const int dx = box_.x0 + static_cast<int>(local % box_.width) - point_.x;
+    const int dy = box_.y0 + static_cast<int>(local / box_.width) - point_.y;
+    if (std::abs(dx) > 1 || std::abs(dy) > 1) return -1;
+    return (dy + 1) * 3 + (dx + 1);
+  }
+
+ private:
+  const GridLevel& level_;
+  LatticePoint point_;
+  const GridBox& box_;
+};
 
 }  // namespace
 
 std::array<double, 9> stencilRow(const GridLevel& level, const SparseSum& a, int u) {
   std::array<double, 9> w{};
+  const Neighbourhood around(level, u);
   for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
-    const int index = stencilIndex(level, u, a.inner()[e]);
+    const int index = around.stencilIndex(a.inner()[e]);
     if (index >= 0) w[static_cast<size_t>(index)] = a.value(e);
   }
   return w;
 }
 
 bool rowIsStencil(const GridLevel& level, const SparseSum& pattern, int u) {
+  const Neighbourhood around(level, u);
   for (int e = pattern.outer()[u]; e != pattern.outer()[u + 1]; ++e)
-    if (stencilIndex(level, u, pattern.inner()[e]) < 0) return false;
+    if (around.stencilIndex(pattern.inner()[e]) < 0) return false;
   return true;
 }
 
@@ -73,12 +87,11 @@ void lockNearWeakRows(const GridLevel& level, const SparseSum& a, int reach,
   });
   for (int u = 0; u < n; ++u) {
     if (!weak[static_cast<size_t>(u)]) continue;
-    const size_t su = static_cast<size_t>(u);
-    const GridBox& box =
-        level.boxes[static_cast<size_t>(level.boxOfChart[static_cast<size_t>(level.chartOfUnknown[su])])];
+    const LatticePoint p = level.point(u);
+    const GridBox& box = level.boxes[static_cast<size_t>(p.box)];
     for (int dy = -reach; dy <= reach; ++dy)
       for (int dx = -reach; dx <= reach; ++dx) {
-        const int x = level.xOfUnknown[su] + dx, y = level.yOfUnknown[su] + dy;
+        const int x = p.x + dx, y = p.y + dy;
         if (!box.contains(x, y)) continue;
         const int v = level.unknownOfSlot[static_cast<size_t>(box.slot(x, y))];
         if (v >= 0) interior[static_cast<size_t>(v)] = 0;
@@ -243,7 +256,7 @@ void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRow
   system.interiorUnknowns.reserve(interiorCount);
   for (int u = 0; u < n; ++u) {
     const size_t su = static_cast<size_t>(u);
-    const int64_t slot = level.slotOfUnknown[su];
+    const int32_t slot = level.slotOfUnknown[su];
     if (interior[su]) {
       system.kind[static_cast<size_t>(slot)] = SlotKind::Interior;
       system.interiorUnknowns.push_back(u);
@@ -253,11 +266,31 @@ void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRow
       system.boundarySlots.push_back(slot);
     }
   }
+  system.interiorTotal = static_cast<int>(interiorCount);
   collectRows(level, system);
   system.nonZeros = pattern.nonZeros();
   const Eigen::SparseMatrix<double> bb = boundaryBlock(level, pattern, system);
   system.boundaryNonZeros = bb.nonZeros();
   if (system.boundaryCount() > 0) system.boundarySolver.analyzePattern(bb);
+}
+
+void indexUnknowns(const GridLevel& level, LevelSystem& system) {
+  const int n = level.unknownCount();
+  if (system.boundaryOfUnknown.size() == static_cast<size_t>(n)) return;
+  system.boundaryOfUnknown.assign(static_cast<size_t>(n), -1);
+  for (int j = 0; j < system.boundaryCount(); ++j)
+    system.boundaryOfUnknown[static_cast<size_t>(unknownOfBoundary(level, system, j))] = j;
+  system.interiorUnknowns.clear();
+  system.interiorUnknowns.reserve(static_cast<size_t>(system.interiorTotal));
+  for (int u = 0; u < n; ++u)
+    if (system.kind[static_cast<size_t>(level.slotOfUnknown[static_cast<size_t>(u)])] ==
+        SlotKind::Interior)
+      system.interiorUnknowns.push_back(u);
+}
+
+void releaseUnknownIndex(LevelSystem& system) {
+  std::vector<int32_t>().swap(system.boundaryOfUnknown);
+  std::vector<int32_t>().swap(system.interiorUnknowns);
 }
 
 void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system) {
@@ -301,8 +334,9 @@ void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSyste
       const int64_t s = row.begin + q + 2 * i;
       if (system.kind[static_cast<size_t>(s)] != SlotKind::Interior) continue;
       const int u = level.unknownOfSlot[static_cast<size_t>(s)];
+      const Neighbourhood around(level, u);
       for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e)
-        w[stencilIndex(level, u, a.inner()[e]) * n + i] = static_cast<T>(a.value(e));
+        w[around.stencilIndex(a.inner()[e]) * n + i] = static_cast<T>(a.value(e));
       const T centre = w[4 * n + i];
       if (!(centre > T(0)))
         throw NumericalError("multigrid: diagonal entry of unknown " + std::to_string(u) +

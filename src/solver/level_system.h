@@ -49,7 +49,7 @@ constexpr int64_t kBandRows = 64;
 /// Compressed rows with slot-indexed columns (rows of A for the boundary unknowns).
 struct SlotCsr {
   std::vector<int64_t> ptr;  ///< row starts, size rows + 1
-  std::vector<int64_t> col;  ///< slot index of each entry
+  std::vector<int32_t> col;  ///< slot index (< 2^31: GridHierarchy checks) of each entry
   std::vector<double> val;   ///< entry values
 };
 
@@ -61,9 +61,12 @@ struct LevelSystem {
   /// without interior slots are empty runs), for the banded relaxation.
   std::vector<SlotRow> boxRows;
   std::vector<RowBand> bands;              ///< bands of boxRows, in order
-  std::vector<int64_t> boundarySlots;      ///< compact boundary index -> slot
-  std::vector<int32_t> boundaryOfUnknown;  ///< per unknown: compact boundary index or -1
-  std::vector<int32_t> interiorUnknowns;   ///< unknowns relaxed by Gauss–Seidel
+  std::vector<int32_t> boundarySlots;      ///< compact boundary index -> slot
+  /// Per unknown: compact boundary index or -1. Like interiorUnknowns, only held while the level
+  /// is classified or assigned (indexUnknowns, releaseUnknownIndex).
+  std::vector<int32_t> boundaryOfUnknown;
+  std::vector<int32_t> interiorUnknowns;   ///< unknowns relaxed by Gauss–Seidel, increasing
+  int interiorTotal = 0;                   ///< number of interior unknowns
   int64_t stencilSize = 0;                 ///< coefficients over all runs (kStencilPlanes per slot)
   int64_t nonZeros = 0;                    ///< non-zeros of A^l
   int64_t boundaryNonZeros = 0;            ///< non-zeros of A_bb^l
@@ -74,9 +77,9 @@ struct LevelSystem {
   /// A_ib^l: per slot of fixupSlots (interior slots with a boundary neighbour), its entries with
   /// the compact boundary index as column.
   SlotCsr interiorNextToBoundary;
-  std::vector<int64_t> fixupSlots;         ///< interior slots with a boundary neighbour
+  std::vector<int32_t> fixupSlots;         ///< interior slots with a boundary neighbour
   CholmodSolver boundarySolver;            ///< factorisation of A_bb^l
-  int interiorCount() const { return static_cast<int>(interiorUnknowns.size()); }
+  int interiorCount() const { return interiorTotal; }
   /// Slots of the level: the length of one channel plane of a slot vector.
   int64_t slotCount() const { return static_cast<int64_t>(kind.size()); }
   int boundaryCount() const { return static_cast<int>(boundarySlots.size()); }
@@ -99,7 +102,15 @@ bool rowIsStencil(const GridLevel& level, const SparseSum& pattern, int u);
 void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRowReach,
                    LevelSystem& system);
 
+/// Rebuilds boundaryOfUnknown and interiorUnknowns of a classified level from kind and
+/// boundarySlots, unless they are held; the numeric phase (assignBoundary, assignLines) reads them.
+void indexUnknowns(const GridLevel& level, LevelSystem& system);
+
+/// Frees boundaryOfUnknown and interiorUnknowns (8 bytes per unknown) between set-ups.
+void releaseUnknownIndex(LevelSystem& system);
+
 /// Numeric phase for the boundary: fills boundaryRows / offBlockEnd and factorises A_bb^l.
+/// Needs indexUnknowns.
 void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system);
 
 /// Numeric phase for the interior: the stencil planes of every run (see SlotRow) from the rows of

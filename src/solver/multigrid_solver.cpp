@@ -191,10 +191,12 @@ struct MultigridSolver<Scalar>::Impl {
         if (symbolicPhase)
           detail::classifyLevel(grid, a, l == 0 ? options.weakRowReach : 0, lv.sys);
         if (numericPhase) {
+          detail::indexUnknowns(grid, lv.sys);
           detail::assignBoundary(grid, a, lv.sys);
           detail::assignStencils<T>(grid, a, lv.sys, lv.stencil);
           detail::assignLines<T>(grid, a, lv.sys, options.lineRatio, lv.lines, lv.lineCoeffs);
         }
+        detail::releaseUnknownIndex(lv.sys);  // the cycles never read it
       }
       if (l == coarsest()) {
         // A one-level hierarchy is solved directly: only then is A^0 formed.

@@ -144,5 +144,18 @@ TEST(SoftSeams, ContinuousBasisNeedsNoLambda) {
   EXPECT_THROW(wrong.validate(), InvalidInputError);
 }
 
+// The continuous basis's C is zero: its n + 1 column starts (8 MB at 2048^2, docs/memory.md)
+// are formed only when seamContinuity() is asked for, never by building the operators.
+TEST(SoftSeams, ContinuousBasisHoldsNoContinuityMatrixUntilAsked) {
+  const Problem p;
+  const auto ops = operators(p, fem::BasisKind::SeamContinuous, 0.0);
+  const int64_t built = ops->storageBytes();
+  const SparseMatrixd& c = ops->seamContinuity();
+  EXPECT_EQ(c.rows(), p.grid.unknownCount());
+  EXPECT_EQ(c.cols(), p.grid.unknownCount());
+  EXPECT_EQ(c.nonZeros(), 0);
+  EXPECT_GE(ops->storageBytes() - built, int64_t(p.grid.unknownCount()) * int64_t(sizeof(int)));
+}
+
 }  // namespace
 }  // namespace texgrad

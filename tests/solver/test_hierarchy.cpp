@@ -15,7 +15,10 @@ TEST(GridHierarchy, LevelZeroIsTheTexelGrid) {
   ASSERT_EQ(l0.unknownCount(), p.grid.unknownCount());
   for (int u = 0; u < l0.unknownCount(); ++u) {
     const size_t t = static_cast<size_t>(p.grid.texelOfUnknown[static_cast<size_t>(u)]);
-    EXPECT_EQ(l0.chartOfUnknown[static_cast<size_t>(u)], p.grid.texelChart[t]);
+    EXPECT_EQ(l0.chartOf(u), p.grid.texelChart[t]);
+    const LatticePoint at = l0.point(u);
+    EXPECT_EQ(at.x, static_cast<int>(t) % p.grid.nx);
+    EXPECT_EQ(at.y, static_cast<int>(t) / p.grid.nx);
     EXPECT_EQ(l0.footprintInterior[static_cast<size_t>(u)] != 0, p.grid.texelClass[t] == TexelClass::Interior);
     EXPECT_EQ(l0.unknownOfSlot[static_cast<size_t>(l0.slotOfUnknown[static_cast<size_t>(u)])], u);
   }
@@ -48,7 +51,7 @@ TEST(GridHierarchy, CoarseInteriorMeansFootprintInsideChart) {
     const GridLevel& g = h.level(l);
     const int s = 1 << l;
     for (int u = 0; u < g.unknownCount(); ++u) {
-      const int x = g.xOfUnknown[static_cast<size_t>(u)], y = g.yOfUnknown[static_cast<size_t>(u)];
+      const auto [box, x, y] = g.point(u);
       const bool expected = s * (x - 1) >= 1 && s * (x + 1) <= 65 && s * (y - 1) >= 1 && s * (y + 1) <= 65;
       EXPECT_EQ(g.footprintInterior[static_cast<size_t>(u)] != 0, expected) << "level " << l;
     }

@@ -35,21 +35,36 @@ struct GridBox {
   }
 };
 
+/// A slot's box (index into GridLevel::boxes) and level-lattice position.
+struct LatticePoint {
+  int box = -1;
+  int x = 0, y = 0;
+};
+
 /// Texels of one level. Level-l lattice position (x, y) is fine grid texel (2^l x, 2^l y); the
 /// chart origin of every chart is grid texel (0, 0). Unknowns are numbered as in the TexelGrid at
-/// level 0 and in slot order at coarser levels.
+/// level 0 and in slot order at coarser levels. Per unknown only its slot is stored; its box,
+/// chart and position follow from the slot (docs/memory.md: 16 bytes per unknown fewer).
 struct GridLevel {
-  std::vector<GridBox> boxes;          ///< one box per chart present at this level
+  std::vector<GridBox> boxes;          ///< one box per chart present, in increasing offset
   std::vector<int32_t> boxOfChart;     ///< per chart: index into boxes, -1 if absent
-  int64_t slotCount = 0;               ///< total slots over all boxes
+  int64_t slotCount = 0;               ///< total slots over all boxes (< 2^31)
   std::vector<int32_t> unknownOfSlot;  ///< per slot: unknown index or -1
-  std::vector<int64_t> slotOfUnknown;  ///< per unknown: slot index
-  std::vector<int32_t> chartOfUnknown; ///< per unknown: chart
-  std::vector<int32_t> xOfUnknown, yOfUnknown;  ///< per unknown: level-lattice position
+  std::vector<int32_t> slotOfUnknown;  ///< per unknown: slot index
   /// Per unknown: footprint [-2^l, 2^l]^2 entirely made of Full cells of its chart (paper §6.1).
   std::vector<uint8_t> footprintInterior;
   /// Number of unknowns at this level.
   int unknownCount() const { return static_cast<int>(slotOfUnknown.size()); }
+  /// Box and lattice position of slot s (a binary search over the boxes).
+  LatticePoint pointOfSlot(int64_t s) const;
+  /// Box and lattice position of unknown u.
+  LatticePoint point(int u) const { return pointOfSlot(slotOfUnknown[static_cast<size_t>(u)]); }
+  /// Chart of unknown u.
+  int chartOf(int u) const { return boxes[static_cast<size_t>(point(u).box)].chart; }
+  /// Box of a chart present at this level.
+  const GridBox& boxOfChartAt(int chart) const {
+    return boxes[static_cast<size_t>(boxOfChart[static_cast<size_t>(chart)])];
+  }
 };
 
 /// Coarse parents of a fine lattice coordinate with their bilinear weights (1, or 1/2 twice).
