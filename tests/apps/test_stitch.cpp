@@ -124,7 +124,8 @@ TEST(GainCompensation, PartialsSeeingTheSameTexelsGiveTheirGainRatio) {
   std::vector<Eigen::MatrixXd> values{truth * 0.9, truth * 1.5};
   std::vector<Eigen::VectorXd> confidence{Eigen::VectorXd::Ones(400), Eigen::VectorXd::Zero(400)};
   confidence[1].tail(200).setOnes();  // the second sees half the texels
-  const std::vector<GainLink> links = partialGainLinks(values, confidence, 3);
+  const std::vector<GainLink> links = partialGainLinks(
+      {compactPartial(values[0], confidence[0]), compactPartial(values[1], confidence[1])}, 3);
   ASSERT_EQ(links.size(), 1u);
   EXPECT_EQ(links[0].weight, 200.0);
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(links[0].logRatio[c], std::log(0.9 / 1.5), 1e-6);

@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "texgrad/apps/partial_view.h"
 #include "texgrad/apps/system_solver.h"
 #include "texgrad/apps/texel_domain.h"
 #include "texgrad/io/image.h"
@@ -59,9 +60,18 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
 /// Partials mode: N partial textures with confidence maps (channel 0 in [0, 1]). The target
 /// gradient on a cell is the confidence-weighted mean of the partials' gradients (a partial's
 /// weight on a cell = its smallest confidence over the cell's texels); zero where none sees it.
-/// Reports and cancels as stitchComposite.
+/// The result holds partials[0] at the texels that are not unknowns. Reports and cancels as
+/// stitchComposite.
 StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>& partials,
                             const std::vector<Image>& confidences, const StitchOptions& options,
+                            const ProgressCallback& progress = {});
+
+/// Partials mode on compact views (compactPartial), the same solve as above. The views are
+/// taken over and freed once the system is formed, before the solver is set up, so they never
+/// share memory with the solver. The result is an image of the grid's size in `format`, zero at
+/// the texels that are not unknowns.
+StitchResult stitchPartials(const TexelDomain& domain, std::vector<PartialView> views,
+                            PixelFormat format, const StitchOptions& options,
                             const ProgressCallback& progress = {});
 
 /// Distinct source label per unknown from a segment image (0 = none, 1.. = sources in order of
