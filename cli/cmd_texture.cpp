@@ -35,7 +35,7 @@ void runTexture(TextureArgs args) {
   TexturedMesh mesh =
       runStage(progress, "read", [&] { return loadMesh(args.mesh, args.weldTolerance); });
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), width, height, {}, progress);
+  TexelDomain domain(std::move(mesh), width, height, {}, progress);
   timer.lap("operators");
   // Only the compact views (or, with --select best, the running best view) stay in memory; the
   // projector's surface points and normals go once every photo is projected.
@@ -68,7 +68,8 @@ void runTexture(TextureArgs args) {
   timer.lap("project");
   const StitchResult result =
       best ? stitchComposite(domain, composite.composite, composite.segments, args.stitch, progress)
-           : stitchPartials(domain, std::move(partials), format, args.stitch, progress);
+           : stitchPartials(domain, domain.releaseOperators(), std::move(partials), format,
+                            args.stitch, progress);
   timer.lap("stitch");
   const Image padded =
       dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image, args.dilate);

@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -42,14 +43,17 @@ int colourChannels(Eigen::Index channels) {
 
 /// Solves (alpha W M W + S + lock) x = alpha W M W xbar + div + lock input into `x`; locked
 /// texels end exactly at `input` (the uncompensated source values; may be empty without a lock
-/// mask). The system matrix is formed in one copy of M's pattern (S shares it), and the solver
-/// is gone when this returns.
-StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
-                         const Eigen::MatrixXd& input, const Eigen::VectorXd& known,
+/// mask). The system matrix is formed in one copy of M's pattern (S shares it); `owned` (the
+/// domain's operators, handed over, or null to use the domain's) is freed once A, the
+/// right-hand side and the barely covered texels' neighbours are formed, and xbar becomes the
+/// initial guess, so neither is held through the solver's set-up and cycles. The solver is gone
+/// when this returns.
+StitchResult solveStitch(const TexelDomain& domain, std::unique_ptr<TexelOperators> owned,
+                         Eigen::MatrixXd xbar, const Eigen::MatrixXd& input, Eigen::VectorXd known,
                          Eigen::MatrixXd divergence, const StitchOptions& options,
                          const ProgressCallback& progress, Eigen::MatrixXd& x) {
   const TexelGrid& grid = domain.grid();
-  const TexelOperators& ops = domain.operators();
+  const TexelOperators& ops = owned ? *owned : domain.operators();
   const auto n = static_cast<Eigen::Index>(grid.unknownCount());
   const SparseMatrixd& mass = ops.mass();
   const SparseViewd stiffness = ops.stiffness();
@@ -59,6 +63,7 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
   for (int k = 0; k < a.outerSize(); ++k)
     for (Eigen::SparseMatrix<double>::InnerIterator it(a, k); it; ++it)
       it.valueRef() *= known[it.row()] * known[it.col()];
+  known.resize(0);
   Eigen::MatrixXd rhs = options.alpha * (a * xbar) + divergence;
   divergence.resize(0, 0);
   // A = alpha W M W + 1e-6 alpha M + S; a little plain screening keeps components that no
@@ -82,18 +87,22 @@ StitchResult solveStitch(const TexelDomain& domain, const Eigen::MatrixXd& xbar,
       ++result.lockedTexels;
     }
   }
-  x = xbar;
+  BarelyCoveredNeighbours bound;
+  if (!options.rawSolution) {
+    std::vector<int32_t> barely = barelyCoveredUnknowns(domain);
+    std::erase_if(barely, [&](int32_t u) { return locked[static_cast<size_t>(u)] != 0; });
+    bound = barelyCoveredNeighbours(mass, std::move(barely));
+  }
+  const Eigen::MatrixXd boundInput = xbar(bound.unknowns, Eigen::all);
+  owned.reset();
+  x = std::move(xbar);
   {
     SystemSolver solver(grid, options.solver);
     solver.initAndUpdate(std::move(a), progress);
     result.report = solver.solve(rhs, x, progress);
   }
   rhs.resize(0, 0);
-  if (!options.rawSolution) {
-    std::vector<int32_t> barely = barelyCoveredUnknowns(domain);
-    std::erase_if(barely, [&](int32_t u) { return locked[static_cast<size_t>(u)] != 0; });
-    boundBarelyCovered(domain, barely, xbar, x);
-  }
+  boundBarelyCovered(bound, boundInput, x);
   for (Eigen::Index u = 0; u < n; ++u)
     if (locked[static_cast<size_t>(u)]) x.row(u) = input.row(u);  // exactly the input
   return result;
@@ -169,8 +178,9 @@ struct Compensation {
 };
 
 /// Estimates the compensation of partials mode from the views' overlaps.
-Compensation estimateCompensation(const TexelDomain& domain, const std::vector<PartialView>& views,
-                                  int channels, const StitchOptions& options) {
+Compensation estimateCompensation(const TexelDomain& domain, const TexelOperators& ops,
+                                  const std::vector<PartialView>& views, int channels,
+                                  const StitchOptions& options) {
   Compensation comp;
   comp.colour = colourChannels(channels);
   const int sources = static_cast<int>(views.size());
@@ -187,7 +197,7 @@ Compensation estimateCompensation(const TexelDomain& domain, const std::vector<P
     comp.gainsOnly = true;
     return comp;
   }
-  comp.normals = texelNormals(domain);
+  comp.normals = texelNormals(domain, ops);
   comp.illumination = solveLogIllumination(sources, comp.colour,
                                            partialShadingSamples(views, comp.normals, comp.colour),
                                            texelsPerSource);
@@ -245,11 +255,25 @@ void forEachCellLeast(const TexelGrid& grid, const SparseRefd& stiffness, const 
   });
 }
 
+/// out += S X for X zero but at rows `seen` (ascending), where it is `values` (seen.size() x k):
+/// Eigen's column-major sparse times dense product (per column of X, the columns of S in
+/// ascending order) restricted to the columns that can add anything, without forming X.
+void addSeenProduct(const SparseMatrixd& s, const std::vector<int32_t>& seen,
+                    const Eigen::MatrixXd& values, Eigen::MatrixXd& out) {
+  for (Eigen::Index c = 0; c < values.cols(); ++c)
+    for (size_t e = 0; e < seen.size(); ++e) {
+      const double v = values(static_cast<Eigen::Index>(e), c);
+      for (SparseMatrixd::InnerIterator it(s, seen[e]); it; ++it)
+        out(it.index(), c) += it.value() * v;
+    }
+}
+
 /// Partials mode on compact views: compensation, blend, target divergence, then the views are
 /// freed and the system solved into `x`.
-StitchResult stitchViews(const TexelDomain& domain, std::vector<PartialView> views,
-                         const StitchOptions& options, const ProgressCallback& progress,
-                         Eigen::MatrixXd& x) {
+StitchResult stitchViews(const TexelDomain& domain, std::unique_ptr<TexelOperators> owned,
+                         std::vector<PartialView> views, const StitchOptions& options,
+                         const ProgressCallback& progress, Eigen::MatrixXd& x) {
+  const TexelOperators& ops = owned ? *owned : domain.operators();
   const TexelGrid& grid = domain.grid();
   const auto n = static_cast<Eigen::Index>(grid.unknownCount());
   const int channels = views[0].channels;
@@ -258,31 +282,31 @@ StitchResult stitchViews(const TexelDomain& domain, std::vector<PartialView> vie
   // The lock keeps the confidence-weighted mean of the partials as given.
   const Eigen::MatrixXd input =
       options.lock.empty() ? Eigen::MatrixXd() : blendViews(views, n, channels, nullptr, weight);
-  Compensation comp = estimateCompensation(domain, views, channels, options);
-  const Eigen::MatrixXd xbar = blendViews(views, n, channels, &comp, weight);
+  Compensation comp = estimateCompensation(domain, ops, views, channels, options);
+  Eigen::MatrixXd xbar = blendViews(views, n, channels, &comp, weight);
   Eigen::VectorXd known(n);
   for (Eigen::Index u = 0; u < n; ++u) known[u] = weight[u] > 0.0 ? 1.0 : 0.0;
   weight.resize(0);
   // A partial's weight on a cell = its smallest confidence over the cell's texels; the target
   // gradient is the weighted mean of the partials' gradients, zero where none sees the cell.
   // One view at a time: the per-cell sums first, then each view's normalised weights.
-  const SparseViewd stiffness = domain.operators().stiffness();
+  const SparseViewd stiffness = ops.stiffness();
   std::vector<double> total(grid.cellCoverage.size(), 0.0), beta(total.size());
   for (const PartialView& view : views)
     forEachCellLeast(grid, stiffness, view, [&](int cell, double least) { total[cell] += least; });
-  Eigen::MatrixXd divergence = Eigen::MatrixXd::Zero(n, channels), values(n, channels);
+  Eigen::MatrixXd divergence = Eigen::MatrixXd::Zero(n, channels), values;
   Eigen::RowVectorXd row(channels);
   for (size_t i = 0; i < views.size(); ++i) {
     std::fill(beta.begin(), beta.end(), 0.0);
     forEachCellLeast(grid, stiffness, views[i], [&](int cell, double least) {
       beta[cell] = total[cell] > 0.0 ? least / total[cell] : 0.0;
     });
-    values.setZero();
+    values.resize(static_cast<Eigen::Index>(views[i].size()), channels);
     for (size_t e = 0; e < views[i].size(); ++e) {
       comp.read(views[i], i, e, row);
-      values.row(views[i].unknowns[e]) = row;
+      values.row(static_cast<Eigen::Index>(e)) = row;
     }
-    divergence += domain.operators().modulatedStiffness(beta) * values;
+    addSeenProduct(ops.modulatedStiffness(beta), views[i].unknowns, values, divergence);
   }
   StitchResult result;
   result.sources = static_cast<int>(views.size());
@@ -295,7 +319,8 @@ StitchResult stitchViews(const TexelDomain& domain, std::vector<PartialView> vie
   std::vector<double>().swap(total);
   std::vector<double>().swap(beta);
   const StitchResult solved =
-      solveStitch(domain, xbar, input, known, std::move(divergence), options, progress, x);
+      solveStitch(domain, std::move(owned), std::move(xbar), input, std::move(known),
+                  std::move(divergence), options, progress, x);
   result.report = solved.report;
   result.lockedTexels = solved.lockedTexels;
   return result;
@@ -381,8 +406,8 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
                      });
   Eigen::MatrixXd divergence = domain.operators().modulatedStiffness(beta) * xbar;
   Eigen::MatrixXd x;
-  StitchResult result =
-      solveStitch(domain, xbar, input, known, std::move(divergence), options, progress, x);
+  StitchResult result = solveStitch(domain, nullptr, std::move(xbar), input, std::move(known),
+                                    std::move(divergence), options, progress, x);
   result.image = composite;
   scatterTexels(grid, x, result.image);
   result.sources = sources;
@@ -412,7 +437,7 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
     views.push_back(compactPartial(grid, partials[i], confidences[i]));
   }
   Eigen::MatrixXd x;
-  StitchResult result = stitchViews(domain, std::move(views), options, progress, x);
+  StitchResult result = stitchViews(domain, nullptr, std::move(views), options, progress, x);
   result.image = partials[0];
   scatterTexels(grid, x, result.image);
   return result;
@@ -421,11 +446,18 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
 StitchResult stitchPartials(const TexelDomain& domain, std::vector<PartialView> views,
                             PixelFormat format, const StitchOptions& options,
                             const ProgressCallback& progress) {
+  return stitchPartials(domain, nullptr, std::move(views), format, options, progress);
+}
+
+StitchResult stitchPartials(const TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+                            std::vector<PartialView> views, PixelFormat format,
+                            const StitchOptions& options, const ProgressCallback& progress) {
   options.validate();
   if (views.empty()) throw InvalidInputError("stitching needs at least one partial texture");
   const int channels = views[0].channels;
   Eigen::MatrixXd x;
-  StitchResult result = stitchViews(domain, std::move(views), options, progress, x);
+  StitchResult result =
+      stitchViews(domain, std::move(operators), std::move(views), options, progress, x);
   const TexelGrid& grid = domain.grid();
   result.image = Image(grid.imageWidth, grid.imageHeight, channels, format);
   scatterTexels(grid, x, result.image);

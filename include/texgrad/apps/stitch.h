@@ -2,6 +2,7 @@
 // gradients inside each source, drop them across sources, and solve for one consistent texture.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "texgrad/apps/partial_view.h"
@@ -73,6 +74,14 @@ StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>&
 StitchResult stitchPartials(const TexelDomain& domain, std::vector<PartialView> views,
                             PixelFormat format, const StitchOptions& options,
                             const ProgressCallback& progress = {});
+
+/// As above, for a caller done with the operators (a one-shot run): `operators`, the domain's
+/// handed over by TexelDomain::releaseOperators (or null to use the domain's), are freed once
+/// the system is formed, before the solver's set-up, so M, S and the piece integrals are not
+/// held through set-up and solve. Same result, bit for bit.
+StitchResult stitchPartials(const TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+                            std::vector<PartialView> views, PixelFormat format,
+                            const StitchOptions& options, const ProgressCallback& progress = {});
 
 /// Distinct source label per unknown from a segment image (0 = none, 1.. = sources in order of
 /// first appearance), and the number of sources.
