@@ -67,7 +67,8 @@ void runTexture(TextureArgs args) {
   for (const PartialView& p : partials) partialBytes += p.storageBytes();
   timer.lap("project");
   const StitchResult result =
-      best ? stitchComposite(domain, composite.composite, composite.segments, args.stitch, progress)
+      best ? stitchComposite(domain, domain.releaseOperators(), composite.composite,
+                             composite.segments, args.stitch, progress)
            : stitchPartials(domain, domain.releaseOperators(), std::move(partials), format,
                             args.stitch, progress);
   timer.lap("stitch");

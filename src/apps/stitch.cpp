@@ -357,23 +357,31 @@ std::vector<int32_t> sourceLabels(const TexelGrid& grid, const Image& segments, 
 StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
                              const Image& segments, const StitchOptions& options,
                              const ProgressCallback& progress) {
+  return stitchComposite(domain, nullptr, composite, segments, options, progress);
+}
+
+StitchResult stitchComposite(const TexelDomain& domain, std::unique_ptr<TexelOperators> owned,
+                             const Image& composite, const Image& segments,
+                             const StitchOptions& options, const ProgressCallback& progress) {
   options.validate();
+  const TexelOperators& ops = owned ? *owned : domain.operators();
   const TexelGrid& grid = domain.grid();
   checkSize(grid, composite, "the composite texture");
   checkSize(grid, segments, "the segment mask");
   int sources = 0;
   const std::vector<int32_t> labels = sourceLabels(grid, segments, sources);
-  const Eigen::MatrixXd input = gatherTexels(grid, composite);
-  Eigen::MatrixXd xbar = input;
+  Eigen::MatrixXd xbar = gatherTexels(grid, composite);
+  // The lock keeps the composite as given (before compensation).
+  const Eigen::MatrixXd input = options.lock.empty() ? Eigen::MatrixXd() : xbar;
   const int channels = colourChannels(xbar.cols());
   Eigen::MatrixXd gains = Eigen::MatrixXd::Ones(sources, channels), illumination;
   if (options.compensateGains && sources > 1) {
     Eigen::VectorXd texelsPerSource = Eigen::VectorXd::Zero(sources);
     for (int32_t label : labels)
       if (label > 0) texelsPerSource[label - 1] += 1.0;
-    const SparseViewd coupling = domain.operators().stiffness();
+    const SparseViewd coupling = ops.stiffness();
     if (options.compensateIllumination) {
-      const Eigen::MatrixX3d normals = texelNormals(domain);
+      const Eigen::MatrixX3d normals = texelNormals(domain, ops);
       illumination = solveLogIllumination(
           sources, channels, compositeShadingSamples(coupling, labels, xbar, normals, channels),
           texelsPerSource);
@@ -397,17 +405,16 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
   for (Eigen::Index u = 0; u < xbar.rows(); ++u) known[u] = labels[u] > 0 ? 1.0 : 0.0;
   // Keep the gradient on cells whose texels all come from one source; zero elsewhere.
   std::vector<double> beta(grid.cellCoverage.size(), 0.0);
-  forEachCoveredCell(grid, domain.operators().stiffness(),
-                     [&](int cell, const std::vector<int32_t>& texels) {
-                       bool same = true;
-                       for (int32_t u : texels)
-                         same &= u >= 0 && labels[u] > 0 && labels[u] == labels[texels[0]];
-                       beta[cell] = same ? 1.0 : 0.0;
-                     });
-  Eigen::MatrixXd divergence = domain.operators().modulatedStiffness(beta) * xbar;
+  forEachCoveredCell(grid, ops.stiffness(), [&](int cell, const std::vector<int32_t>& texels) {
+    bool same = true;
+    for (int32_t u : texels) same &= u >= 0 && labels[u] > 0 && labels[u] == labels[texels[0]];
+    beta[cell] = same ? 1.0 : 0.0;
+  });
+  Eigen::MatrixXd divergence = ops.modulatedStiffness(beta) * xbar;
+  std::vector<double>().swap(beta);
   Eigen::MatrixXd x;
-  StitchResult result = solveStitch(domain, nullptr, std::move(xbar), input, std::move(known),
-                                    std::move(divergence), options, progress, x);
+  StitchResult result = solveStitch(domain, std::move(owned), std::move(xbar), input,
+                                    std::move(known), std::move(divergence), options, progress, x);
   result.image = composite;
   scatterTexels(grid, x, result.image);
   result.sources = sources;

@@ -251,6 +251,27 @@ TEST(Stitch, CompactViewsWithHandedOverOperatorsMatchTheImagePartialsBitForBit) 
   EXPECT_GT(x.maxCoeff(), 0.1);  // a solution, not an empty image
 }
 
+TEST(Stitch, CompositeWithHandedOverOperatorsMatchesTheDomainsOperatorsBitForBit) {
+  // Two sources with different gains; the hand-over frees the operators before the solve (as
+  // `texgrad texture --select best` runs it) and must not change a bit of the result.
+  TexelDomain domain(procedural::cubeSphere(8), 96, 96);
+  Image composite = test::randomTexture(96, 96, 3, 24, 0.2f, 0.8f), segments(96, 96, 1);
+  for (int j = 0; j < 96; ++j)
+    for (int i = 0; i < 96; ++i) {
+      segments.at(i, j) = i < 48 ? 0.5f : 1.0f;
+      if (i >= 48)
+        for (int c = 0; c < 3; ++c) composite.at(i, j, c) *= 1.3f;
+    }
+  const StitchOptions o;
+  const StitchResult kept = stitchComposite(domain, composite, segments, o);
+  const StitchResult freed =
+      stitchComposite(domain, domain.releaseOperators(), composite, segments, o);
+  EXPECT_FALSE(domain.hasOperators());
+  EXPECT_EQ(freed.sources, 2);
+  EXPECT_EQ(freed.sourceGains, kept.sourceGains);
+  EXPECT_EQ(freed.image.pixels, kept.image.pixels);
+}
+
 TEST(Stitch, PartialsNeedOneConfidencePerTexture) {
   const TexelDomain domain(procedural::cube(2), 48, 32);
   const std::vector<Image> partials(2, Image(48, 32, 3));

@@ -58,6 +58,13 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
                              const Image& segments, const StitchOptions& options,
                              const ProgressCallback& progress = {});
 
+/// As above, for a caller done with the operators: `operators` (the domain's, handed over by
+/// TexelDomain::releaseOperators, or null) are freed once the system is formed, before the
+/// solver's set-up. Same result, bit for bit.
+StitchResult stitchComposite(const TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+                             const Image& composite, const Image& segments,
+                             const StitchOptions& options, const ProgressCallback& progress = {});
+
 /// Partials mode: N partial textures with confidence maps (channel 0 in [0, 1]). The target
 /// gradient on a cell is the confidence-weighted mean of the partials' gradients (a partial's
 /// weight on a cell = its smallest confidence over the cell's texels); zero where none sees it.
