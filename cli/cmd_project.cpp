@@ -40,10 +40,11 @@ void runProject(const ProjectArgs& args) {
       runStage(progress, "read", [&] { return loadMesh(args.mesh, args.weldTolerance); });
   timer.lap("read");
   // Projection reads the basis and S only (surface points, normals): no re-assembly.
-  const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
-                           progress);
+  TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(), progress);
   timer.lap("operators");
   const PhotoProjector projector(domain, args.photos.options);
+  // The projector keeps what projecting needs (surface points, normals): free M and S.
+  domain.releaseOperators().reset();
   timer.lap("surface points");
   nlohmann::json views = nlohmann::json::array();
   int index = 0;

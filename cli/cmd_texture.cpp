@@ -35,33 +35,42 @@ void runTexture(TextureArgs args) {
   TexturedMesh mesh =
       runStage(progress, "read", [&] { return loadMesh(args.mesh, args.weldTolerance); });
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), width, height, {}, progress);
+  TexelDomain domain(std::move(mesh), width, height, {}, progress);
   timer.lap("operators");
-  const PhotoProjector projector(domain, args.photos.options);
-  timer.lap("surface points");
-  // Only the partials (or, with --select best, the running best view) stay in memory.
-  std::vector<Image> partials, confidences;
+  // Only the compact views (or, with --select best, the running best view) stay in memory; the
+  // projector's surface points and normals go once every photo is projected.
+  std::vector<PartialView> partials;
   BestViewComposite composite;
+  PixelFormat format = PixelFormat::UInt8;
   nlohmann::json views = nlohmann::json::array();
-  const int kept = projectEachPhoto(
-      projector, cameras, args.photos, progress, args.report.quiet,
-      [&](size_t k, PhotoProjection&& view) {
-        views.push_back({{"camera", cameras[k].name}, {"seen_texels", view.seenTexels}});
-        if (best) {
-          composite.add(view, static_cast<int>(views.size()) - 1);
-        } else {
-          partials.push_back(std::move(view.partial));
-          confidences.push_back(std::move(view.confidence));
-        }
-      });
+  int kept = 0;
+  {
+    const PhotoProjector projector(domain, args.photos.options);
+    timer.lap("surface points");
+    kept = projectEachPhoto(
+        projector, cameras, args.photos, progress, args.report.quiet,
+        [&](size_t k, PhotoProjection&& view) {
+          views.push_back({{"camera", cameras[k].name}, {"seen_texels", view.seenTexels}});
+          if (best) {
+            composite.add(view, static_cast<int>(views.size()) - 1);
+          } else {
+            format = view.partial.format;
+            partials.push_back(compactPartial(domain.grid(), view.partial, view.confidence));
+          }
+        });
+  }
   if (kept == 0)
     throw InvalidInputError("no camera of '" + args.photos.cameras +
                             "' sees the mesh: check that the cameras and the mesh share one "
                             "coordinate frame");
+  int64_t partialBytes = 0;
+  for (const PartialView& p : partials) partialBytes += p.storageBytes();
   timer.lap("project");
   const StitchResult result =
-      best ? stitchComposite(domain, composite.composite, composite.segments, args.stitch, progress)
-           : stitchPartials(domain, partials, confidences, args.stitch, progress);
+      best ? stitchComposite(domain, domain.releaseOperators(), composite.composite,
+                             composite.segments, args.stitch, progress)
+           : stitchPartials(domain, domain.releaseOperators(), std::move(partials), format,
+                            args.stitch, progress);
   timer.lap("stitch");
   const Image padded =
       dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image, args.dilate);
@@ -79,6 +88,7 @@ void runTexture(TextureArgs args) {
                {"texels", domain.unknowns()},
                {"cameras", cameras.size()},
                {"views", views},
+               {"partials_bytes", partialBytes},
                {"solve", toJson(result.report)},
                {"stages", timer.json()},
                {"peak_rss_bytes", peakResidentBytes()},
@@ -94,7 +104,8 @@ void addTextureCommand(CLI::App& app) {
       "Make one seamless texture from calibrated photos: project every photo onto the atlas "
       "(as `texgrad project`), stitch the views with each view's exposure, colour cast and "
       "shading compensated (as `texgrad stitch --partials`), then pad the gutters (as `texgrad "
-      "dilate`). One photo is in memory at a time, plus one partial texture per view.");
+      "dilate`). One photo is in memory at a time, plus each view's colour and confidence at the "
+      "texels it sees.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   addPhotoOptions(cmd, args->photos);

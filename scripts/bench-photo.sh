@@ -23,9 +23,17 @@ run() {  # name, then the texgrad arguments
   printf '%-8s %8.1f s  peak %6.0f MiB  stages %s\n' "$name" "$seconds" "$((kib / 1024))" \
     "$(tr -d ' \n' < "$work/$name.json" | grep -o '"stages":{[^}]*}')"
 }
-echo "spot at ${texels}^2, $views photos of ${width}x${height}; partials held by texture:" \
-  "$((views * texels * texels * 16 / 1048576)) MiB (RGB + confidence, float)"
+echo "spot at ${texels}^2, $views photos of ${width}x${height}"
 run project project "$mesh" --cameras "$work/sparse" --images "$work/images" \
   --resolution "$texels" --out-dir "$work/views"
 run texture texture "$mesh" --cameras "$work/sparse" --images "$work/images" \
   --resolution "$texels" --out "$work/texture.png"
+# The partials: what texture holds of the views between projection and stitching (colour and
+# confidence at the texels each view sees, float: --json partials_bytes), and for comparison the
+# same views as the full-size float images project makes before writing them.
+held=$(tr -d ' \n' < "$work/texture.json" | grep -o '"partials_bytes":[0-9]*' | cut -d: -f2)
+read -r _ peak < "$work/texture.time"
+echo "partials held by texture: $((held / 1048576)) MiB (seen texels only; as full-size float" \
+  "images they would be $((views * texels * texels * 16 / 1048576)) MiB)"
+echo "texture peak $((peak / 1024)) MiB = 1024 MiB + partials + $((peak / 1024 - 1024 - \
+  held / 1048576)) MiB"

@@ -158,16 +158,44 @@ std::vector<GainLink> compositeGainLinks(
   return samples.links();
 }
 
-std::vector<GainLink> partialGainLinks(const std::vector<Eigen::MatrixXd>& values,
-                                       const std::vector<Eigen::VectorXd>& confidence,
-                                       int channels) {
+namespace {
+
+/// Calls f(i, j) for every pair of positions with a.unknowns[i] == b.unknowns[j], in ascending
+/// unknown order (both lists are ascending).
+template <typename F>
+void forEachShared(const PartialView& a, const PartialView& b, F&& f) {
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (a.unknowns[i] < b.unknowns[j]) {
+      ++i;
+    } else if (b.unknowns[j] < a.unknowns[i]) {
+      ++j;
+    } else {
+      f(i, j);
+      ++i;
+      ++j;
+    }
+  }
+}
+
+/// Entry i of `view` as a row of doubles.
+Eigen::RowVectorXd rowOf(const PartialView& view, size_t i) {
+  Eigen::RowVectorXd row(view.channels);
+  for (int c = 0; c < view.channels; ++c)
+    row[c] = view.values[i * static_cast<size_t>(view.channels) + static_cast<size_t>(c)];
+  return row;
+}
+
+}  // namespace
+
+std::vector<GainLink> partialGainLinks(const std::vector<PartialView>& views, int channels) {
   RatioSamples samples(channels);
-  for (size_t a = 0; a < values.size(); ++a)
-    for (size_t b = a + 1; b < values.size(); ++b)
-      for (Eigen::Index u = 0; u < values[a].rows(); ++u)
-        if (confidence[a][u] > 0.0 && confidence[b][u] > 0.0)
-          samples.add(static_cast<int>(a), static_cast<int>(b), values[a].row(u).head(channels),
-                      values[b].row(u).head(channels));
+  for (size_t a = 0; a < views.size(); ++a)
+    for (size_t b = a + 1; b < views.size(); ++b)
+      forEachShared(views[a], views[b], [&](size_t i, size_t j) {
+        samples.add(static_cast<int>(a), static_cast<int>(b), rowOf(views[a], i).head(channels),
+                    rowOf(views[b], j).head(channels));
+      });
   return samples.links();
 }
 
@@ -220,19 +248,39 @@ std::vector<ShadingSample> compositeShadingSamples(
   return thinned(std::move(samples));
 }
 
-std::vector<ShadingSample> partialShadingSamples(const std::vector<Eigen::MatrixXd>& values,
-                                                 const std::vector<Eigen::VectorXd>& confidence,
+std::vector<ShadingSample> partialShadingSamples(const std::vector<PartialView>& views,
                                                  const Eigen::MatrixX3d& normals, int channels) {
-  std::vector<ShadingSample> samples;
+  // Two passes over the shared texels: count the samples, then keep every stride-th one, the
+  // samples thinned() would keep of the whole list (which at 10 views of 2048^2 holds ~25M
+  // samples, 1.1 GB).
   ShadingSample s;
-  for (size_t a = 0; a < values.size(); ++a)
-    for (size_t b = a + 1; b < values.size(); ++b)
-      for (Eigen::Index u = 0; u < values[a].rows(); ++u)
-        if (confidence[a][u] > 0.0 && confidence[b][u] > 0.0 &&
-            makeSample(static_cast<int>(a), static_cast<int>(b), values[a].row(u), values[b].row(u),
-                       normals.row(u), normals.row(u), channels, s))
-          samples.push_back(s);
-  return thinned(std::move(samples));
+  const auto visit = [&](auto&& take) {
+    for (size_t a = 0; a < views.size(); ++a)
+      for (size_t b = a + 1; b < views.size(); ++b)
+        forEachShared(views[a], views[b], [&](size_t i, size_t j) {
+          const Eigen::Index u = views[a].unknowns[i];
+          if (makeSample(static_cast<int>(a), static_cast<int>(b), rowOf(views[a], i),
+                         rowOf(views[b], j), normals.row(u), normals.row(u), channels, s))
+            take(s);
+        });
+  };
+  size_t total = 0;
+  visit([&](const ShadingSample&) { ++total; });
+  const size_t stride = std::max<size_t>(1, (total + kMaxShadingSamples - 1) / kMaxShadingSamples);
+  std::vector<ShadingSample> samples;
+  samples.reserve((total + stride - 1) / stride);
+  size_t index = 0;
+  visit([&](const ShadingSample& sample) {
+    if (index++ % stride == 0) samples.push_back(sample);
+  });
+  return samples;
+}
+
+double logIllumination(const Eigen::MatrixXd& illumination, int source,
+                       const Eigen::MatrixX3d& normals, Eigen::Index row, int channel) {
+  const auto k = static_cast<Eigen::Index>(4 * source);
+  return illumination(k, channel) +
+         normals.row(row).dot(illumination.col(channel).segment<3>(k + 1).transpose());
 }
 
 Eigen::RowVectorXd removeIllumination(const Eigen::MatrixXd& illumination, int source,
@@ -240,11 +288,9 @@ Eigen::RowVectorXd removeIllumination(const Eigen::MatrixXd& illumination, int s
                                       const std::vector<Eigen::Index>& rows, int channels,
                                       Eigen::MatrixXd& values) {
   Eigen::RowVectorXd mean = Eigen::RowVectorXd::Zero(channels);
-  const auto k = static_cast<Eigen::Index>(4 * source);
   for (Eigen::Index u : rows)
     for (int c = 0; c < channels; ++c) {
-      const double log = illumination(k, c) +
-                         normals.row(u).dot(illumination.col(c).segment<3>(k + 1).transpose());
+      const double log = logIllumination(illumination, source, normals, u, c);
       values(u, c) /= std::exp(log);
       mean[c] += log;
     }

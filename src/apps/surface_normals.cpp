@@ -28,9 +28,7 @@ std::vector<Eigen::Vector3d> vertexNormals(const TexturedMesh& mesh) {
 /// Calls f(unknown, face, barycentrics) for every texel centre inside a valid UV triangle, the
 /// first face in index order winning where UVs overlap.
 template <typename F>
-void forEachCentre(const TexelDomain& domain, F&& f) {
-  const TexelGrid& grid = domain.grid();
-  const fem::TexelBasis& basis = domain.operators().basis();
+void forEachCentre(const TexelGrid& grid, const fem::TexelBasis& basis, F&& f) {
   std::vector<uint8_t> seen(static_cast<size_t>(grid.unknownCount()), 0);
   for (int face = 0; face < basis.faceCount(); ++face) {
     if (!basis.faceValid(face)) continue;
@@ -59,19 +57,25 @@ void forEachCentre(const TexelDomain& domain, F&& f) {
 
 std::vector<int32_t> texelCentreFaces(const TexelDomain& domain) {
   std::vector<int32_t> faces(static_cast<size_t>(domain.grid().unknownCount()), -1);
-  forEachCentre(domain, [&](int32_t u, int face, const Eigen::Vector3d&) {
+  const fem::TexelBasis& basis = domain.operators().basis();
+  forEachCentre(domain.grid(), basis, [&](int32_t u, int face, const Eigen::Vector3d&) {
     faces[static_cast<size_t>(u)] = face;
   });
   return faces;
 }
 
 Eigen::MatrixX3d texelNormals(const TexelDomain& domain) {
+  return texelNormals(domain, domain.operators());
+}
+
+Eigen::MatrixX3d texelNormals(const TexelDomain& domain, const TexelOperators& operators) {
   const TexturedMesh& mesh = domain.mesh();
   const std::vector<Eigen::Vector3d> vertex = vertexNormals(mesh);
   const auto n = static_cast<Eigen::Index>(domain.grid().unknownCount());
   Eigen::MatrixX3d normals = Eigen::MatrixX3d::Zero(n, 3);
   std::vector<uint8_t> known(static_cast<size_t>(n), 0);
-  forEachCentre(domain, [&](int32_t u, int face, const Eigen::Vector3d& w) {
+  const fem::TexelBasis& basis = operators.basis();
+  forEachCentre(domain.grid(), basis, [&](int32_t u, int face, const Eigen::Vector3d& w) {
     const Triangle& t = mesh.triangles[static_cast<size_t>(face)];
     Eigen::Vector3d v = Eigen::Vector3d::Zero();
     for (int k = 0; k < 3; ++k)
@@ -81,7 +85,7 @@ Eigen::MatrixX3d texelNormals(const TexelDomain& domain) {
       known[static_cast<size_t>(u)] = 1;
     }
   });
-  const SparseViewd s = domain.operators().stiffness();
+  const SparseViewd s = operators.stiffness();
   for (Eigen::Index u = 0; u < n; ++u) {
     if (known[static_cast<size_t>(u)]) continue;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();

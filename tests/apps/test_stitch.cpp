@@ -124,10 +124,34 @@ TEST(GainCompensation, PartialsSeeingTheSameTexelsGiveTheirGainRatio) {
   std::vector<Eigen::MatrixXd> values{truth * 0.9, truth * 1.5};
   std::vector<Eigen::VectorXd> confidence{Eigen::VectorXd::Ones(400), Eigen::VectorXd::Zero(400)};
   confidence[1].tail(200).setOnes();  // the second sees half the texels
-  const std::vector<GainLink> links = partialGainLinks(values, confidence, 3);
+  const std::vector<GainLink> links = partialGainLinks(
+      {compactPartial(values[0], confidence[0]), compactPartial(values[1], confidence[1])}, 3);
   ASSERT_EQ(links.size(), 1u);
   EXPECT_EQ(links[0].weight, 200.0);
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(links[0].logRatio[c], std::log(0.9 / 1.5), 1e-6);
+}
+
+TEST(GainCompensation, PartialShadingSamplesAreEvenlyThinnedWithoutStoringThemAll) {
+  // Two views share unknowns 0 .. n-1; the normal's x component names the unknown, so each
+  // kept sample says which shared texel it came from. Thinning keeps every stride-th of them.
+  const int n = 450001;  // stride ceil(n / 200000) = 3
+  PartialView a, b;
+  a.channels = b.channels = 3;
+  Eigen::MatrixX3d normals = Eigen::MatrixX3d::Zero(n, 3);
+  for (int u = 0; u < n; ++u) {
+    for (PartialView* v : {&a, &b}) {
+      v->unknowns.push_back(u);
+      v->confidence.push_back(1.0f);
+      for (int c = 0; c < 3; ++c) v->values.push_back(v == &a ? 0.5f : 0.25f);
+    }
+    normals(u, 0) = u;
+  }
+  const std::vector<ShadingSample> samples = partialShadingSamples({a, b}, normals, 3);
+  ASSERT_EQ(samples.size(), static_cast<size_t>((n + 2) / 3));
+  for (size_t k = 0; k < samples.size(); ++k) {
+    ASSERT_EQ(samples[k].na.x(), static_cast<float>(3 * k)) << k;
+    ASSERT_NEAR(samples[k].logRatio[0], std::log(2.0), 1e-6);
+  }
 }
 
 TEST(GainCompensation, IlluminationFitRecoversGainAndShadingDespiteOutliers) {
@@ -189,6 +213,63 @@ TEST(Stitch, LockedTexelsAreBitIdentical) {
     if (lock.at(i, j) <= 0.5f) continue;
     for (int c = 0; c < 3; ++c) ASSERT_EQ(r.image.at(i, j, c), composite.at(i, j, c));
   }
+}
+
+TEST(Stitch, CompactViewsWithHandedOverOperatorsMatchTheImagePartialsBitForBit) {
+  // Three partials with different gains, shading-free, each seeing an overlapping band of
+  // columns with a confidence ramp; the compact path (operators handed over and freed before
+  // the solve, as `texgrad texture` runs it) must give the image path's values exactly.
+  TexelDomain domain(procedural::cubeSphere(8), 96, 96);
+  const Image base = test::randomTexture(96, 96, 3, 23, 0.2f, 0.8f);
+  std::vector<Image> partials, confidences;
+  for (int k = 0; k < 3; ++k) {
+    Image p(96, 96, 3), c(96, 96, 1);
+    for (int j = 0; j < 96; ++j)
+      for (int i = 0; i < 96; ++i) {
+        const int from = 28 * k, to = from + 40;
+        if (i < from || i >= to) continue;
+        c.at(i, j) = 0.25f + 0.75f * static_cast<float>(i - from) / 40.0f;
+        for (int ch = 0; ch < 3; ++ch)
+          p.at(i, j, ch) = (0.8f + 0.2f * static_cast<float>(k)) * base.at(i, j, ch);
+      }
+    partials.push_back(p);
+    confidences.push_back(c);
+  }
+  StitchOptions o;
+  const StitchResult images = stitchPartials(domain, partials, confidences, o);
+  std::vector<PartialView> views;
+  for (size_t k = 0; k < partials.size(); ++k)
+    views.push_back(compactPartial(domain.grid(), partials[k], confidences[k]));
+  const StitchResult compact =
+      stitchPartials(domain, domain.releaseOperators(), std::move(views), partials[0].format, o);
+  EXPECT_FALSE(domain.hasOperators());
+  EXPECT_EQ(compact.sources, 3);
+  ASSERT_EQ(compact.sourceGains.rows(), 3);
+  EXPECT_EQ(compact.sourceGains, images.sourceGains);
+  const Eigen::MatrixXd x = gatherTexels(domain.grid(), compact.image);
+  EXPECT_EQ(x, gatherTexels(domain.grid(), images.image));
+  EXPECT_GT(x.maxCoeff(), 0.1);  // a solution, not an empty image
+}
+
+TEST(Stitch, CompositeWithHandedOverOperatorsMatchesTheDomainsOperatorsBitForBit) {
+  // Two sources with different gains; the hand-over frees the operators before the solve (as
+  // `texgrad texture --select best` runs it) and must not change a bit of the result.
+  TexelDomain domain(procedural::cubeSphere(8), 96, 96);
+  Image composite = test::randomTexture(96, 96, 3, 24, 0.2f, 0.8f), segments(96, 96, 1);
+  for (int j = 0; j < 96; ++j)
+    for (int i = 0; i < 96; ++i) {
+      segments.at(i, j) = i < 48 ? 0.5f : 1.0f;
+      if (i >= 48)
+        for (int c = 0; c < 3; ++c) composite.at(i, j, c) *= 1.3f;
+    }
+  const StitchOptions o;
+  const StitchResult kept = stitchComposite(domain, composite, segments, o);
+  const StitchResult freed =
+      stitchComposite(domain, domain.releaseOperators(), composite, segments, o);
+  EXPECT_FALSE(domain.hasOperators());
+  EXPECT_EQ(freed.sources, 2);
+  EXPECT_EQ(freed.sourceGains, kept.sourceGains);
+  EXPECT_EQ(freed.image.pixels, kept.image.pixels);
 }
 
 TEST(Stitch, PartialsNeedOneConfidencePerTexture) {

@@ -12,6 +12,8 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include "texgrad/apps/partial_view.h"
+
 namespace texgrad {
 
 /// What two sources say about their relative gain: per channel, the median over their meeting
@@ -53,10 +55,8 @@ std::vector<GainLink> compositeGainLinks(
     const Eigen::Ref<const Eigen::SparseMatrix<double>>& coupling,
     const std::vector<int32_t>& labels, const Eigen::MatrixXd& values, int channels);
 
-/// Links from partial textures: texels that two partials both see (confidence > 0).
-std::vector<GainLink> partialGainLinks(const std::vector<Eigen::MatrixXd>& values,
-                                       const std::vector<Eigen::VectorXd>& confidence,
-                                       int channels);
+/// Links from partial textures: texels that two partials both see.
+std::vector<GainLink> partialGainLinks(const std::vector<PartialView>& views, int channels);
 
 /// Illumination samples from a composite: coupled unknowns with different source labels, as in
 /// compositeGainLinks; `normals` holds one unit normal per unknown. At most ~200k, evenly spread.
@@ -65,10 +65,15 @@ std::vector<ShadingSample> compositeShadingSamples(
     const std::vector<int32_t>& labels, const Eigen::MatrixXd& values,
     const Eigen::MatrixX3d& normals, int channels);
 
-/// Illumination samples from partial textures: texels two partials both see.
-std::vector<ShadingSample> partialShadingSamples(const std::vector<Eigen::MatrixXd>& values,
-                                                 const std::vector<Eigen::VectorXd>& confidence,
+/// Illumination samples from partial textures: texels two partials both see, thinned as
+/// compositeShadingSamples (counted first, so the samples dropped are never stored).
+std::vector<ShadingSample> partialShadingSamples(const std::vector<PartialView>& views,
                                                  const Eigen::MatrixX3d& normals, int channels);
+
+/// Log of source `source`'s illumination a_k + b_k . n in channel `channel` at the unit normal
+/// normals.row(row) (illumination as solveLogIllumination returns it).
+double logIllumination(const Eigen::MatrixXd& illumination, int source,
+                       const Eigen::MatrixX3d& normals, Eigen::Index row, int channel);
 
 /// Divides out source k's illumination exp(a_k + b_k . n) (from solveLogIllumination) from the
 /// first `channels` channels of rows `rows` of values; returns the mean log illumination over

@@ -2,8 +2,10 @@
 // gradients inside each source, drop them across sources, and solve for one consistent texture.
 #pragma once
 
+#include <memory>
 #include <vector>
 
+#include "texgrad/apps/partial_view.h"
 #include "texgrad/apps/system_solver.h"
 #include "texgrad/apps/texel_domain.h"
 #include "texgrad/io/image.h"
@@ -56,13 +58,37 @@ StitchResult stitchComposite(const TexelDomain& domain, const Image& composite,
                              const Image& segments, const StitchOptions& options,
                              const ProgressCallback& progress = {});
 
+/// As above, for a caller done with the operators: `operators` (the domain's, handed over by
+/// TexelDomain::releaseOperators, or null) are freed once the system is formed, before the
+/// solver's set-up. Same result, bit for bit.
+StitchResult stitchComposite(const TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+                             const Image& composite, const Image& segments,
+                             const StitchOptions& options, const ProgressCallback& progress = {});
+
 /// Partials mode: N partial textures with confidence maps (channel 0 in [0, 1]). The target
 /// gradient on a cell is the confidence-weighted mean of the partials' gradients (a partial's
 /// weight on a cell = its smallest confidence over the cell's texels); zero where none sees it.
-/// Reports and cancels as stitchComposite.
+/// The result holds partials[0] at the texels that are not unknowns. Reports and cancels as
+/// stitchComposite.
 StitchResult stitchPartials(const TexelDomain& domain, const std::vector<Image>& partials,
                             const std::vector<Image>& confidences, const StitchOptions& options,
                             const ProgressCallback& progress = {});
+
+/// Partials mode on compact views (compactPartial), the same solve as above. The views are
+/// taken over and freed once the system is formed, before the solver is set up, so they never
+/// share memory with the solver. The result is an image of the grid's size in `format`, zero at
+/// the texels that are not unknowns.
+StitchResult stitchPartials(const TexelDomain& domain, std::vector<PartialView> views,
+                            PixelFormat format, const StitchOptions& options,
+                            const ProgressCallback& progress = {});
+
+/// As above, for a caller done with the operators (a one-shot run): `operators`, the domain's
+/// handed over by TexelDomain::releaseOperators (or null to use the domain's), are freed once
+/// the system is formed, before the solver's set-up, so M, S and the piece integrals are not
+/// held through set-up and solve. Same result, bit for bit.
+StitchResult stitchPartials(const TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+                            std::vector<PartialView> views, PixelFormat format,
+                            const StitchOptions& options, const ProgressCallback& progress = {});
 
 /// Distinct source label per unknown from a segment image (0 = none, 1.. = sources in order of
 /// first appearance), and the number of sources.

@@ -20,4 +20,7 @@ std::vector<int32_t> texelCentreFaces(const TexelDomain& domain);
 /// gets a zero row.
 Eigen::MatrixX3d texelNormals(const TexelDomain& domain);
 
+/// As above with the domain's operators given (e.g. handed over by releaseOperators).
+Eigen::MatrixX3d texelNormals(const TexelDomain& domain, const TexelOperators& operators);
+
 }  // namespace texgrad
