@@ -21,8 +21,11 @@ RESERVE_BYTES = 5 * 10**9  # an allocation this large is the start-up reserve
 STAGES = [
     ("write", "writeTextureOutput"),
     ("result image", "InteractiveFilter::image"),
+    ("result image", "filteredImage"),
     ("cycles", "SystemSolver::solve"),
     ("solver set-up", "InteractiveFilter::InteractiveFilter"),
+    ("solver set-up", "SystemSolver::initAndUpdate"),
+    ("filter state", "filterOnce"),  # x, the right-hand side, the system matrix (one-shot)
     ("solve (other)", "filterTexture"),
     ("operators", "TexelDomain::TexelDomain"),
     ("read", "loadTexture"),

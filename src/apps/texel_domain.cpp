@@ -20,4 +20,18 @@ TexelDomain::TexelDomain(TexturedMesh mesh, int width, int height, const Operato
   operators_ = std::make_unique<TexelOperators>(mesh_, atlas_, grid_, options, progress);
 }
 
+const TexelOperators& TexelDomain::operators() const {
+  if (!operators_)
+    throw InvalidInputError(
+        "TexelDomain::operators: the operators were handed over by "
+        "releaseOperators()");
+  return *operators_;
+}
+
+std::unique_ptr<TexelOperators> TexelDomain::releaseOperators() {
+  if (!operators_)
+    throw InvalidInputError("TexelDomain::releaseOperators: the operators were handed over before");
+  return std::move(operators_);
+}
+
 }  // namespace texgrad

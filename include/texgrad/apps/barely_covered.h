@@ -25,6 +25,20 @@ inline constexpr double kBarelyCoveredKernel = 1e-3;
 /// Unknowns of `domain` (ascending) whose kernel coverage is below kBarelyCoveredKernel.
 std::vector<int32_t> barelyCoveredUnknowns(const TexelDomain& domain);
 
+/// What bounding the barely covered unknowns needs from the mass matrix, kept so that the bound
+/// can be applied after the operators are freed (a one-shot filter).
+struct BarelyCoveredNeighbours {
+  std::vector<int32_t> unknowns;  ///< the unknowns to bound
+  /// Neighbours of unknowns[i] (off-diagonal positive entries of M in its column) are
+  /// neighbours[start[i] .. start[i + 1]); start has unknowns.size() + 1 entries.
+  std::vector<int64_t> start;
+  std::vector<int32_t> neighbours;  ///< see start
+};
+
+/// The neighbours of `barely` under `mass` (the domain's mass matrix M, |T| x |T|).
+BarelyCoveredNeighbours barelyCoveredNeighbours(const SparseMatrixd& mass,
+                                                std::vector<int32_t> barely);
+
 /// Clamps each row `barely` of `x` (unknowns x channels), per channel, into the range of its
 /// own row of `input` and of its neighbours under the mass matrix (positive entries) that are
 /// not in `barely`: the values the surface shows around the texel, which the texel itself barely
@@ -33,5 +47,10 @@ std::vector<int32_t> barelyCoveredUnknowns(const TexelDomain& domain);
 /// rows bounded before; rows that no pass reaches take `input`'s row.
 void boundBarelyCovered(const TexelDomain& domain, std::span<const int32_t> barely,
                         const Eigen::MatrixXd& input, Eigen::MatrixXd& x);
+
+/// boundBarelyCovered with the neighbours gathered beforehand; `input` holds only the rows of
+/// the bounded unknowns (row i for bound.unknowns[i]), so the whole input need not be kept.
+void boundBarelyCovered(const BarelyCoveredNeighbours& bound, const Eigen::MatrixXd& input,
+                        Eigen::MatrixXd& x);
 
 }  // namespace texgrad

@@ -13,6 +13,7 @@ namespace texgrad {
 
 /// A mesh with its atlas, texel grid and operators (M, S for the unit-area immersion metric),
 /// built once and shared by apps, the CLI and the viewer. Not copyable (operators refer to it).
+/// A one-shot caller may take the operators over (releaseOperators) to free them early.
 class TexelDomain {
  public:
   /// Builds atlas, grid (width x height) and operators; throws InvalidInputError, before any of
@@ -26,7 +27,15 @@ class TexelDomain {
   const TexturedMesh& mesh() const { return mesh_; }
   const Atlas& atlas() const { return atlas_; }
   const TexelGrid& grid() const { return grid_; }
-  const TexelOperators& operators() const { return *operators_; }
+  /// The operators; throws InvalidInputError once releaseOperators() has handed them over.
+  const TexelOperators& operators() const;
+  /// Hands the operators (M, S, C, the piece integrals: ~190 bytes per active texel) over to
+  /// the caller, who may free them once a solver holds what it needs (filterTexture's consuming
+  /// overload); mesh, atlas and grid stay. The returned object refers to this domain's mesh and
+  /// grid, so it must not outlive the domain. Throws InvalidInputError if already handed over.
+  std::unique_ptr<TexelOperators> releaseOperators();
+  /// False once releaseOperators() has handed the operators over.
+  bool hasOperators() const { return operators_ != nullptr; }
   /// Number of unknowns (active texels).
   int unknowns() const { return grid_.unknownCount(); }
 
