@@ -7,6 +7,7 @@
 
 #include "app_fixtures.h"
 #include "shared_meshes.h"
+#include "test_paths.h"
 #include "texgrad/apps/barely_covered.h"
 #include "texgrad/apps/filter.h"
 #include "texgrad/apps/normal_map.h"
@@ -14,6 +15,7 @@
 #include "texgrad/atlas/seam_jump.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/image_io.h"
+#include "texgrad/io/image_levels.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/procedural.h"
 
@@ -239,16 +241,29 @@ TEST(Filter, OneShotRunsGiveTheInteractiveFiltersImageBitForBit) {
   for (size_t c = 0; c < mapped.betaPerCell.size(); c += 2) mapped.betaPerCell[c] = 2.0;
   FilterOptions normals = uniform;
   normals.normalMap = true;
-  for (const FilterOptions& options : {uniform, mapped, normals}) {
-    InteractiveFilter interactive(shared, texture, options);
+  // An 8-bit texture (as read from a file) is held as its levels through the one-shot solve.
+  const Image levels = [&] {
+    const auto dir = test::tempDir("filter_levels");
+    Image eightBit = texture;
+    eightBit.format = PixelFormat::UInt8;
+    writeImage(dir / "texture.png", eightBit);
+    Image read = readImage(dir / "texture.png");
+    std::filesystem::remove_all(dir);
+    return read;
+  }();
+  ASSERT_TRUE(exactByteLevels(levels).has_value());
+  for (const auto& [options, input] : {std::pair{uniform, texture}, std::pair{mapped, texture},
+                                       std::pair{normals, texture}, std::pair{uniform, levels}}) {
+    InteractiveFilter interactive(shared, input, options);
     interactive.solve();
     const Image expected = interactive.image();
     const std::string what = "beta map " + std::to_string(!options.betaPerCell.empty()) +
-                             ", normal map " + std::to_string(options.normalMap);
-    EXPECT_EQ(differingValues(filterTexture(shared, texture, options).image, expected), 0) << what;
+                             ", normal map " + std::to_string(options.normalMap) + ", 8-bit " +
+                             std::to_string(input.format == PixelFormat::UInt8);
+    EXPECT_EQ(differingValues(filterTexture(shared, input, options).image, expected), 0) << what;
     TexelDomain consumed(mesh, kSize, kSize);
     const FilterResult result =
-        filterTexture(consumed, consumed.releaseOperators(), texture, options);
+        filterTexture(consumed, consumed.releaseOperators(), input, options);
     EXPECT_EQ(differingValues(result.image, expected), 0) << what;
     EXPECT_FALSE(consumed.hasOperators());
     EXPECT_EQ(consumed.unknowns(), shared.unknowns()) << "the grid stays";

@@ -56,8 +56,9 @@ struct FilterResult {
 /// Filters `texture` (at the domain's resolution). Multigrid starts from the input texture.
 /// Reports stages "solver setup" and "solve" (with the cycle or iteration count) to `progress`,
 /// which may cancel (Cancelled). Keeps neither M x0 nor S x0 (InteractiveFilter keeps them for
-/// new parameters), and writes the result into `texture`'s storage: move a texture in that the
-/// caller no longer needs.
+/// new parameters), holds an 8-bit texture as its levels during set-up and solve
+/// (exactByteLevels), and writes the result into `texture`'s storage: move a texture in that
+/// the caller no longer needs.
 FilterResult filterTexture(const TexelDomain& domain, Image texture, const FilterOptions& options,
                            const ProgressCallback& progress = {});
 
