@@ -21,6 +21,7 @@ RESERVE_BYTES = 5 * 10**9  # an allocation this large is the start-up reserve
 STAGES = [
     ("write", "writeTextureOutput"),
     ("result image", "InteractiveFilter::image"),
+    ("result image", "filteredImage"),
     ("cycles", "SystemSolver::solve"),
     ("stitch solver set-up", "solveStitch"),
     ("stitch (partials)", "stitchPartials"),
@@ -28,6 +29,8 @@ STAGES = [
     ("project", "projectEachPhoto"),
     ("surface points", "PhotoProjector::PhotoProjector"),
     ("solver set-up", "InteractiveFilter::InteractiveFilter"),
+    ("solver set-up", "SystemSolver::initAndUpdate"),
+    ("filter state", "filterOnce"),  # x, the right-hand side, the system matrix (one-shot)
     ("solve (other)", "filterTexture"),
     ("operators", "TexelDomain::TexelDomain"),
     ("read", "loadTexture"),

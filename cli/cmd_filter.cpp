@@ -30,7 +30,8 @@ void runFilter(FilterArgs args) {
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
-  const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
+  Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
+  const int width = texture.width, height = texture.height;
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
   // Only a beta map (S_beta) re-assembles the stiffness; otherwise the piece integrals go.
@@ -44,15 +45,17 @@ void runFilter(FilterArgs args) {
         "--seam-weight applies to --basis bilinear only (the continuous "
         "basis has no seam jumps to penalise)");
   }
-  const TexelDomain domain(std::move(mesh), texture.width, texture.height, operatorOptions,
-                           progress);
+  TexelDomain domain(std::move(mesh), width, height, operatorOptions, progress);
   timer.lap("operators");
   if (!args.betaMap.empty()) {
     const Image map = readImage(args.betaMap);
     args.options.betaPerCell =
         cellValuesFromMap(domain.grid(), map, args.betaRange[0], args.betaRange[1]);
   }
-  const FilterResult result = filterTexture(domain, texture, args.options, progress);
+  // One run, one filter: the filter takes the texture (and writes its result there) and frees
+  // the operators once its solver has what it needs (docs/memory.md).
+  const FilterResult result =
+      filterTexture(domain, domain.releaseOperators(), std::move(texture), args.options, progress);
   timer.lap("solve");
   const PixelFormat stored = runStage(progress, "write", [&] {
     return writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth,
@@ -64,7 +67,7 @@ void runFilter(FilterArgs args) {
   if (args.report.json)
     printJson({{"command", "filter"},
                {"texels", domain.unknowns()},
-               {"resolution", {texture.width, texture.height}},
+               {"resolution", {width, height}},
                {"solver", toString(args.options.solver.kind)},
                {"init_seconds", result.initSeconds},
                {"update_seconds", result.updateSeconds},

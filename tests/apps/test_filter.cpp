@@ -3,13 +3,19 @@
 // maps, normal maps stay unit length (every glTF model with one).
 #include <gtest/gtest.h>
 
+#include <memory>
+
 #include "app_fixtures.h"
 #include "shared_meshes.h"
+#include "test_paths.h"
+#include "texgrad/apps/barely_covered.h"
 #include "texgrad/apps/filter.h"
 #include "texgrad/apps/normal_map.h"
 #include "texgrad/apps/seams.h"
 #include "texgrad/atlas/seam_jump.h"
+#include "texgrad/core/error.h"
 #include "texgrad/io/image_io.h"
+#include "texgrad/io/image_levels.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/procedural.h"
 
@@ -209,6 +215,82 @@ TEST(Filter, ReportsSetupAndSolveStagesAndSolvesAgainAfterACancel) {
   filter.solve();
   // CG restarted from the third iterate reaches the same tolerance: equal to far below 8 bits.
   EXPECT_LT(test::activeRms(domain, filter.image(), reference.image), 1e-6);
+}
+
+/// Number of stored values (texel and channel) in which two images of one size differ.
+int64_t differingValues(const Image& a, const Image& b) {
+  if (a.pixels.size() != b.pixels.size()) return static_cast<int64_t>(a.pixels.size());
+  int64_t count = 0;
+  for (size_t k = 0; k < a.pixels.size(); ++k) count += a.pixels[k] != b.pixels[k] ? 1 : 0;
+  return count;
+}
+
+TEST(Filter, OneShotRunsGiveTheInteractiveFiltersImageBitForBit) {
+  // The jittered cube has barely covered texels, so the bound (which reads M's neighbours) is
+  // exercised; filterTexture forms its right-hand side without InteractiveFilter's stored
+  // products, and the consuming overload frees M and S before the solver's set-up.
+  constexpr int kSize = procedural::kAlignedCubeResolution;
+  constexpr double kJitter = 0.01;
+  const TexturedMesh mesh = procedural::alignedCube(4, kJitter);
+  const TexelDomain shared(mesh, kSize, kSize);
+  ASSERT_FALSE(barelyCoveredUnknowns(shared).empty());
+  const Image texture = test::randomTexture(kSize, kSize, 3, 5);
+  FilterOptions uniform = withSolver(SolverKind::MultigridCg, 0.3);
+  FilterOptions mapped = uniform;
+  mapped.betaPerCell.assign(shared.grid().cellCoverage.size(), 0.0);
+  for (size_t c = 0; c < mapped.betaPerCell.size(); c += 2) mapped.betaPerCell[c] = 2.0;
+  FilterOptions normals = uniform;
+  normals.normalMap = true;
+  // An 8-bit texture (as read from a file) is held as its levels through the one-shot solve.
+  const Image levels = [&] {
+    const auto dir = test::tempDir("filter_levels");
+    Image eightBit = texture;
+    eightBit.format = PixelFormat::UInt8;
+    writeImage(dir / "texture.png", eightBit);
+    Image read = readImage(dir / "texture.png");
+    std::filesystem::remove_all(dir);
+    return read;
+  }();
+  ASSERT_TRUE(exactByteLevels(levels).has_value());
+  for (const auto& [options, input] : {std::pair{uniform, texture}, std::pair{mapped, texture},
+                                       std::pair{normals, texture}, std::pair{uniform, levels}}) {
+    InteractiveFilter interactive(shared, input, options);
+    interactive.solve();
+    const Image expected = interactive.image();
+    const std::string what = "beta map " + std::to_string(!options.betaPerCell.empty()) +
+                             ", normal map " + std::to_string(options.normalMap) + ", 8-bit " +
+                             std::to_string(input.format == PixelFormat::UInt8);
+    EXPECT_EQ(differingValues(filterTexture(shared, input, options).image, expected), 0) << what;
+    TexelDomain consumed(mesh, kSize, kSize);
+    const FilterResult result =
+        filterTexture(consumed, consumed.releaseOperators(), input, options);
+    EXPECT_EQ(differingValues(result.image, expected), 0) << what;
+    EXPECT_FALSE(consumed.hasOperators());
+    EXPECT_EQ(consumed.unknowns(), shared.unknowns()) << "the grid stays";
+  }
+}
+
+TEST(Filter, OperatorsHandedOverOnceAndOnlyTheDomainsAreAccepted) {
+  TexelDomain domain(procedural::cube(3), 96, 64);
+  const TexelDomain other(procedural::cylinder(), 96, 64);
+  const Image input = test::randomTexture(96, 64, 3, 4);
+  ASSERT_NE(other.unknowns(), domain.unknowns());
+  const FilterOptions options = withSolver(SolverKind::Direct, 0.0);
+  const auto refused = [&](std::unique_ptr<TexelOperators> operators, const TexelDomain& to) {
+    try {
+      filterTexture(to, std::move(operators), input, options);
+    } catch (const InvalidInputError& e) {
+      return std::string(e.what()).find("not the domain's") != std::string::npos;
+    }
+    return false;
+  };
+  EXPECT_TRUE(refused(nullptr, domain));
+  std::unique_ptr<TexelOperators> operators = domain.releaseOperators();
+  ASSERT_NE(operators, nullptr);
+  EXPECT_FALSE(domain.hasOperators());
+  EXPECT_THROW(static_cast<void>(domain.operators()), InvalidInputError);
+  EXPECT_THROW(static_cast<void>(domain.releaseOperators()), InvalidInputError);
+  EXPECT_TRUE(refused(std::move(operators), other));
 }
 
 TEST(Filter, InactiveTexelsAreUntouched) {

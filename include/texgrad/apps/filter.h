@@ -2,9 +2,11 @@
 // opening seams, globally (beta) or locally (a per-cell beta map).
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <vector>
 
+#include "texgrad/apps/barely_covered.h"
 #include "texgrad/apps/system_solver.h"
 #include "texgrad/apps/texel_domain.h"
 #include "texgrad/io/image.h"
@@ -53,16 +55,27 @@ struct FilterResult {
 
 /// Filters `texture` (at the domain's resolution). Multigrid starts from the input texture.
 /// Reports stages "solver setup" and "solve" (with the cycle or iteration count) to `progress`,
-/// which may cancel (Cancelled).
-FilterResult filterTexture(const TexelDomain& domain, const Image& texture,
-                           const FilterOptions& options, const ProgressCallback& progress = {});
+/// which may cancel (Cancelled). Keeps neither M x0 nor S x0 (InteractiveFilter keeps them for
+/// new parameters), holds an 8-bit texture as its levels during set-up and solve
+/// (exactByteLevels), and writes the result into `texture`'s storage: move a texture in that
+/// the caller no longer needs.
+FilterResult filterTexture(const TexelDomain& domain, Image texture, const FilterOptions& options,
+                           const ProgressCallback& progress = {});
+
+/// As above, for a caller done with the operators: `operators` (the domain's, handed over by
+/// TexelDomain::releaseOperators) are freed once the right-hand side and the system matrix
+/// alpha M + S are formed, before the solver's set-up, so M, S and C (~190 bytes per active
+/// texel) are not held through set-up and solve. Same result, bit for bit.
+FilterResult filterTexture(const TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+                           Image texture, const FilterOptions& options,
+                           const ProgressCallback& progress = {});
 
 /// The filter as a stateful solver for interactive use: change alpha / beta map, then step.
 class InteractiveFilter {
  public:
-  /// Sets up the solver (init + update phases) for `texture` on `domain`, which must outlive it;
-  /// reports stage "solver setup" to `progress`, which may cancel.
-  InteractiveFilter(const TexelDomain& domain, const Image& texture, const FilterOptions& options,
+  /// Sets up the solver (init + update phases) for `texture` on `domain`, which must outlive it
+  /// and keep its operators; reports stage "solver setup" to `progress`, which may cancel.
+  InteractiveFilter(const TexelDomain& domain, Image texture, const FilterOptions& options,
                     const ProgressCallback& progress = {});
   /// New alpha, uniform beta and optional per-cell beta (replaces beta): numeric update only.
   void setParameters(double alpha, double beta, std::vector<double> betaPerCell = {});
@@ -90,7 +103,7 @@ class InteractiveFilter {
   double alpha_ = 0.0;  ///< alpha of the last numeric update (0: none yet)
   Eigen::MatrixXd x0_, x_, rhs_;
   Eigen::MatrixXd massX0_, stiffnessX0_;  ///< M x0 and S x0: fixed, reused by every setParameters
-  std::vector<int32_t> barely_;           ///< unknowns replaced in image() (empty with rawSolution)
+  BarelyCoveredNeighbours barely_;        ///< bounded in image() (none with rawSolution)
   SystemSolver solver_;
 };
 

@@ -1,0 +1,56 @@
+// 8-bit levels of an image and back, exact both ways: a level's value is the one OpenImageIO
+// decodes it to (readImage asks OpenImageIO for floats), taken from OpenImageIO itself.
+#include "texgrad/io/image_levels.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <array>
+#include <cmath>
+#include <numeric>
+
+namespace texgrad {
+namespace {
+
+/// Number of 8-bit levels; the top one is the value 1.
+constexpr int kLevels = 256;
+
+/// The float each level decodes to, by OpenImageIO's own conversion (level * (1 / 255.0f) in
+/// OpenImageIO 2.4, which is not always level / 255.0f).
+const std::array<float, kLevels>& levelValues() {
+  static const std::array<float, kLevels> values = [] {
+    std::array<uint8_t, kLevels> levels{};
+    std::iota(levels.begin(), levels.end(), uint8_t{0});
+    std::array<float, kLevels> v{};
+    if (!OIIO::convert_pixel_values(OIIO::TypeDesc::UINT8, levels.data(), OIIO::TypeDesc::FLOAT,
+                                    v.data(), kLevels))
+      v.fill(std::numeric_limits<float>::quiet_NaN());  // no value then matches a level
+    return v;
+  }();
+  return values;
+}
+
+}  // namespace
+
+std::optional<std::vector<uint8_t>> exactByteLevels(const Image& image) {
+  if (image.format != PixelFormat::UInt8) return std::nullopt;
+  const std::array<float, kLevels>& values = levelValues();
+  constexpr float top = kLevels - 1;
+  std::vector<uint8_t> levels(image.pixels.size());
+  for (size_t k = 0; k < levels.size(); ++k) {
+    const float v = image.pixels[k];
+    if (!(v >= 0.0f && v <= 1.0f)) return std::nullopt;  // NaN fails too
+    const auto level = static_cast<uint8_t>(std::lround(v * top));
+    if (values[level] != v) return std::nullopt;
+    levels[k] = level;
+  }
+  return levels;
+}
+
+std::vector<float> valuesOfByteLevels(std::span<const uint8_t> levels) {
+  const std::array<float, kLevels>& values = levelValues();
+  std::vector<float> out(levels.size());
+  for (size_t k = 0; k < levels.size(); ++k) out[k] = values[levels[k]];
+  return out;
+}
+
+}  // namespace texgrad
