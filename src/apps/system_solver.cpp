@@ -488,6 +488,18 @@ const Eigen::SparseMatrix<double>& SystemSolver::matrix() const {
   return impl_->a;
 }
 
+int64_t SystemSolver::storageBytes() const {
+  const Impl& m = *impl_;
+  const auto denseBytes = [](const Eigen::MatrixXd& v) {
+    return static_cast<int64_t>(v.size()) * int64_t(sizeof(double));
+  };
+  int64_t bytes = static_cast<int64_t>(m.a.nonZeros()) * int64_t(sizeof(double) + sizeof(int)) +
+                  (m.a.outerSize() > 0 ? m.a.outerSize() + 1 : 0) * int64_t(sizeof(int)) +
+                  denseBytes(m.r) + denseBytes(m.z) + denseBytes(m.lastX) + denseBytes(m.lastB);
+  if (m.settings.kind == SolverKind::Direct) return bytes + m.direct.storageBytes();
+  return bytes + m.visitMultigrid([](const auto& solver) { return solver.storageBytes(); });
+}
+
 std::string SystemSolver::summary() const {
   if (impl_->settings.kind == SolverKind::Direct)
     return "direct solver (CHOLMOD), " + std::to_string(impl_->grid.unknownCount()) + " unknowns";

@@ -121,6 +121,9 @@ class SystemSolver {
   /// The system matrix A of the last update (compressed). Throws Error if the solver keeps no
   /// copy (construct it with MatrixCopy::Kept to read this).
   const Eigen::SparseMatrix<double>& matrix() const;
+  /// Bytes held between solves: the kept copy of A (if any), the multigrid hierarchy or the
+  /// direct factorisation, and the refinement vectors (docs/memory.md).
+  int64_t storageBytes() const;
   /// Multigrid hierarchy summary, or a one-line description for the direct solver.
   std::string summary() const;
   /// Seconds spent in init and in the last update.
