@@ -167,7 +167,7 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
         options.validate();
         return options;
       }()),
-      diffusionSolver_(domain.grid(), options.solver),
+      diffusionSolver_(domain.grid(), options.solver, MatrixCopy::Kept),  // matrix() read below
       distanceSolver_(domain.grid(), options.solver) {
   const auto start = Clock::now();
   const TexelOperators& ops = domain.operators();

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 
 #include "texgrad/core/error.h"
@@ -132,6 +133,11 @@ bool parseSinglePrecision(const std::string& text) {
   throw InvalidInputError("unknown precision '" + text + "'; use float or double");
 }
 
+bool SolverSettings::cgUsesLevelZeroOperator() const {
+  return kind == SolverKind::MultigridCg &&
+         (!singlePrecision || effectiveTolerance() >= kFloatOperatorTolerance);
+}
+
 double SolverSettings::effectiveTolerance() const {
   if (tolerance == 0.0 && kind == SolverKind::MultigridCg) return kDefaultCgTolerance;
   return tolerance;
@@ -155,16 +161,20 @@ struct SystemSolver::Impl {
   std::unique_ptr<MultigridSolver<float>> multigridFloat;
   std::unique_ptr<MultigridSolver<double>> multigridDouble;
   CholmodSolver direct;
+  MatrixCopy copy;
+  /// A of the last update while keepsMatrix(); empty otherwise (the multigrid holds A^0).
   Eigen::SparseMatrix<double> a;
+  Eigen::Index rows = 0;  ///< of A
   double initTime = 0.0, updateTime = 0.0;
   tbb::task_arena arena;
   /// Refinement state: residual r = b - A x, correction z, and the b and x r belongs to.
   Eigen::MatrixXd r, z, lastX, lastB;
   bool cacheValid = false;
 
-  Impl(const TexelGrid& g, const SolverSettings& s)
+  Impl(const TexelGrid& g, const SolverSettings& s, MatrixCopy c)
       : grid(g),
         settings(s),
+        copy(c),
         arena(s.multigrid.threads > 0 ? s.multigrid.threads : tbb::task_arena::automatic) {
     settings.validate();
     if (settings.kind == SolverKind::Direct) return;
@@ -172,6 +182,24 @@ struct SystemSolver::Impl {
       multigridFloat = std::make_unique<MultigridSolver<float>>(settings.multigrid);
     else
       multigridDouble = std::make_unique<MultigridSolver<double>>(settings.multigrid);
+  }
+
+  /// True while the solves need A itself, or the caller asked for it (MatrixCopy).
+  bool keepsMatrix() const {
+    return copy == MatrixCopy::Kept || !settings.cgUsesLevelZeroOperator();
+  }
+
+  /// Takes over `from` as A; hands it to `factorise` (the direct or multigrid set-up), then frees
+  /// it unless keepsMatrix().
+  template <typename F>
+  void adoptMatrix(Eigen::SparseMatrix<double>& from, F&& factorise) {
+    a.swap(from);
+    Eigen::SparseMatrix<double>().swap(from);
+    a.makeCompressed();
+    rows = a.rows();
+    cacheValid = false;
+    factorise(a);
+    if (!keepsMatrix()) Eigen::SparseMatrix<double>().swap(a);
   }
 
   template <typename F>
@@ -270,11 +298,27 @@ struct SystemSolver::Impl {
     cacheValid = true;
   }
 
-  /// ||b - A x|| / ||b|| (||A x|| if b = 0), on the solver's threads.
+  /// ||b - A x|| / ||b|| (||A x|| if b = 0), on the solver's threads; A x by the multigrid's
+  /// level-0 operator when A is not kept.
   double relativeResidual(const Eigen::MatrixXd& b, const Eigen::MatrixXd& x) {
     double rr = 0.0;
     Eigen::MatrixXd scratch;  // not r: that holds the residual step() may reuse
-    arena.execute([&] { rr = residual(a, b, x, scratch); });
+    if (keepsMatrix()) {
+      arena.execute([&] { rr = residual(a, b, x, scratch); });
+    } else {
+      visitMultigrid([&](const auto& solver) {
+        // A x as A x_hi + A x_lo, x_hi = x rounded to the cycle precision (as conjugateGradient).
+        using Block = typename std::decay_t<decltype(solver)>::Matrix;
+        const Block high = x.cast<typename Block::Scalar>();
+        Block product;
+        solver.applyOperator(high, product);
+        scratch = b - product.template cast<double>();
+        solver.applyOperator(
+            (x - high.template cast<double>()).template cast<typename Block::Scalar>(), product);
+        rr = (scratch - product.template cast<double>()).squaredNorm();
+        return 0;
+      });
+    }
     const double norm = b.norm();
     return norm > 0 ? std::sqrt(rr) / norm : std::sqrt(rr);
   }
@@ -315,6 +359,8 @@ struct SystemSolver::Impl {
         options.maxIterations = count;
         options.tolerance = settings.effectiveTolerance();
         return visitMultigrid([&](auto& solver) {
+          if (settings.cgUsesLevelZeroOperator())
+            return conjugateGradient(multigridOperator(solver), b, x, options, progress);
           return conjugateGradient(a, b, x, multigridPreconditioner(solver), options, progress);
         });
       }
@@ -323,8 +369,8 @@ struct SystemSolver::Impl {
   }
 };
 
-SystemSolver::SystemSolver(const TexelGrid& grid, const SolverSettings& settings)
-    : impl_(std::make_unique<Impl>(grid, settings)) {}
+SystemSolver::SystemSolver(const TexelGrid& grid, const SolverSettings& settings, MatrixCopy copy)
+    : impl_(std::make_unique<Impl>(grid, settings, copy)) {}
 SystemSolver::~SystemSolver() = default;
 SystemSolver::SystemSolver(SystemSolver&&) noexcept = default;
 SystemSolver& SystemSolver::operator=(SystemSolver&&) noexcept = default;
@@ -348,17 +394,6 @@ void SystemSolver::init(const Eigen::SparseMatrix<double>& pattern) {
   impl_->initTime = secondsSince(start);
 }
 
-namespace {
-
-/// Moves `from` into `to` and frees to's old storage: swaps, as Eigen 3.4's SparseMatrix
-/// assignment would copy even from std::move.
-void adopt(Eigen::SparseMatrix<double>& to, Eigen::SparseMatrix<double>& from) {
-  to.swap(from);
-  Eigen::SparseMatrix<double>().swap(from);
-}
-
-}  // namespace
-
 void SystemSolver::update(const Eigen::SparseMatrix<double>& a, const ProgressCallback& progress) {
   Eigen::SparseMatrix<double> copy = a;
   update(std::move(copy), progress);
@@ -373,16 +408,16 @@ void SystemSolver::initAndUpdate(const Eigen::SparseMatrix<double>& a,
 void SystemSolver::update(Eigen::SparseMatrix<double>&& a, const ProgressCallback& progress) {
   reportProgress(progress, kSetupStage, 0.0);
   const auto start = std::chrono::steady_clock::now();
-  adopt(impl_->a, a);
-  impl_->a.makeCompressed();
-  impl_->cacheValid = false;
-  if (impl_->settings.kind == SolverKind::Direct)
-    impl_->direct.factorize(impl_->a);
-  else
-    impl_->visitMultigrid([&](auto& solver) {
-      solver.update(impl_->a);
-      return 0;
-    });
+  // Swaps, as Eigen 3.4's SparseMatrix assignment would copy even from std::move.
+  impl_->adoptMatrix(a, [&](const Eigen::SparseMatrix<double>& adopted) {
+    if (impl_->settings.kind == SolverKind::Direct)
+      impl_->direct.factorize(adopted);
+    else
+      impl_->visitMultigrid([&](auto& solver) {
+        solver.update(adopted);
+        return 0;
+      });
+  });
   impl_->updateTime = secondsSince(start);
   reportProgress(progress, kSetupStage, 1.0);
 }
@@ -397,12 +432,11 @@ void SystemSolver::initAndUpdate(Eigen::SparseMatrix<double>&& a,
   }
   reportProgress(progress, kSetupStage, 0.0);
   const auto start = std::chrono::steady_clock::now();
-  adopt(impl_->a, a);
-  impl_->a.makeCompressed();
-  impl_->cacheValid = false;
-  impl_->visitMultigrid([&](auto& solver) {
-    solver.initAndUpdate(impl_->grid, impl_->a);
-    return 0;
+  impl_->adoptMatrix(a, [&](const Eigen::SparseMatrix<double>& adopted) {
+    impl_->visitMultigrid([&](auto& solver) {
+      solver.initAndUpdate(impl_->grid, adopted);
+      return 0;
+    });
   });
   impl_->initTime = secondsSince(start);
   impl_->updateTime = 0.0;
@@ -440,14 +474,30 @@ SolveReport SystemSolver::refine(const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
 }
 
 double SystemSolver::relativeResidual(const Eigen::MatrixXd& b, const Eigen::MatrixXd& x) const {
-  if (b.rows() != impl_->a.rows() || x.rows() != b.rows() || x.cols() != b.cols())
+  if (b.rows() != impl_->rows || x.rows() != b.rows() || x.cols() != b.cols())
     throw InvalidInputError("SystemSolver::relativeResidual: b and x must both be " +
-                            std::to_string(impl_->a.rows()) + " x k");
+                            std::to_string(impl_->rows) + " x k");
   return impl_->relativeResidual(b, x);
 }
 
 const Eigen::SparseMatrix<double>& SystemSolver::matrix() const {
+  if (!impl_->keepsMatrix())
+    throw Error(
+        "SystemSolver::matrix: this solver keeps no copy of A (CG applies the multigrid's "
+        "level-0 operator); construct it with MatrixCopy::Kept");
   return impl_->a;
+}
+
+int64_t SystemSolver::storageBytes() const {
+  const Impl& m = *impl_;
+  const auto denseBytes = [](const Eigen::MatrixXd& v) {
+    return static_cast<int64_t>(v.size()) * int64_t(sizeof(double));
+  };
+  int64_t bytes = static_cast<int64_t>(m.a.nonZeros()) * int64_t(sizeof(double) + sizeof(int)) +
+                  (m.a.outerSize() > 0 ? m.a.outerSize() + 1 : 0) * int64_t(sizeof(int)) +
+                  denseBytes(m.r) + denseBytes(m.z) + denseBytes(m.lastX) + denseBytes(m.lastB);
+  if (m.settings.kind == SolverKind::Direct) return bytes + m.direct.storageBytes();
+  return bytes + m.visitMultigrid([](const auto& solver) { return solver.storageBytes(); });
 }
 
 std::string SystemSolver::summary() const {

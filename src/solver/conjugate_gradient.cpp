@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <string>
+#include <type_traits>
 
 #include "texgrad/core/error.h"
 
@@ -18,19 +19,22 @@ double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-/// Column-wise dot products of two n x k blocks.
-Eigen::RowVectorXd columnDots(const Eigen::MatrixXd& u, const Eigen::MatrixXd& v) {
-  return u.cwiseProduct(v).colwise().sum();
+/// Column-wise dot products of two n x k blocks, accumulated in double whatever their precision.
+template <typename U, typename V>
+Eigen::RowVectorXd columnDots(const U& u, const V& v) {
+  return u.template cast<double>().cwiseProduct(v.template cast<double>()).colwise().sum();
 }
 
 /// Throws NumericalError naming the first NaN or infinity of `m` ("the right-hand side").
-void requireFinite(const Eigen::MatrixXd& m, const std::string& what) {
+template <typename M>
+void requireFinite(const M& m, const std::string& what) {
   if (m.allFinite()) return;
   for (Eigen::Index c = 0; c < m.cols(); ++c)
     for (Eigen::Index i = 0; i < m.rows(); ++i)
       if (!std::isfinite(m(i, c)))
-        throw NumericalError("conjugateGradient: " + what + " holds " + std::to_string(m(i, c)) +
-                             " at row " + std::to_string(i) + ", column " + std::to_string(c));
+        throw NumericalError("conjugateGradient: " + what + " holds " +
+                             std::to_string(double(m(i, c))) + " at row " + std::to_string(i) +
+                             ", column " + std::to_string(c));
 }
 
 /// Throws NumericalError if a curvature p^T A p (or r^T z) of column c at iteration k is NaN, or
@@ -74,13 +78,15 @@ void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
   });
 }
 
-SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,
-                              Eigen::MatrixXd& x, const Preconditioner& preconditioner,
-                              const CgOptions& options, const ProgressCallback& progress) {
+template <typename Scalar>
+SolveReport conjugateGradient(const CgOperator<Scalar>& a, const Eigen::MatrixXd& b,
+                              Eigen::MatrixXd& x, const CgOptions& options,
+                              const ProgressCallback& progress) {
+  using Block = typename CgOperator<Scalar>::Block;
   options.validate();
-  if (a.rows() != a.cols() || b.rows() != a.rows() || x.rows() != b.rows() || x.cols() != b.cols())
-    throw InvalidInputError("conjugateGradient: A is " + std::to_string(a.rows()) + " x " +
-                            std::to_string(a.cols()) + ", B has " + std::to_string(b.rows()) +
+  if (b.rows() != a.rows || x.rows() != b.rows() || x.cols() != b.cols())
+    throw InvalidInputError("conjugateGradient: A is " + std::to_string(a.rows) + " x " +
+                            std::to_string(a.rows) + ", B has " + std::to_string(b.rows()) +
                             " rows, X is " + std::to_string(x.rows()) + " x " +
                             std::to_string(x.cols()));
   requireFinite(b, "the right-hand side");
@@ -88,52 +94,68 @@ SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen:
   SolveReport report;
   const double bNorm = b.norm();
   const double scale = bNorm > 0.0 ? 1.0 / bNorm : 1.0;
-  Eigen::MatrixXd r, z, p, ap;
+  // w holds A p until x and r have taken their step, then M⁻¹ r until p has taken it: one block
+  // for both (the classic four work vectors in three).
+  Eigen::MatrixXd r;
+  Block p, w;
   auto start = Clock::now();
-  symmetricProduct(a, x, ap);
+  if constexpr (std::is_same_v<Scalar, double>) {
+    a.product(x, w);
+    r = b - w;
+  } else {
+    // A x as A x_hi + A x_lo with x_hi = x rounded to Scalar: the residual of x itself, not of
+    // x_hi (A would amplify that rounding by its largest eigenvalues). p is free until then.
+    p = x.template cast<Scalar>();
+    a.product(p, w);
+    r = b - w.template cast<double>();
+    p = (x - p.template cast<double>()).template cast<Scalar>();
+    a.product(p, w);
+    r -= w.template cast<double>();
+  }
   report.times.matvec += secondsSince(start);
-  r = b - ap;
   auto precondition = [&] {
     const auto t = Clock::now();
-    if (preconditioner) preconditioner(r, z);
-    else z = r;
+    if (a.preconditioner)
+      a.preconditioner(r, w);
+    else
+      w = r.template cast<Scalar>();
     report.times.preconditioner += secondsSince(t);
   };
   precondition();
-  p = z;
-  Eigen::RowVectorXd rz = columnDots(r, z);
+  p = w;
+  Eigen::RowVectorXd rz = columnDots(r, w);
   for (Eigen::Index c = 0; c < b.cols(); ++c)
     requirePositive(rz(c), !r.col(c).isZero(0.0), "r^T z", "the preconditioner", c, -1);
   report.residuals.push_back(r.norm() * scale);
   requireFinite(r, "the residual of the initial guess (A holds non-finite values)");
   // The iterate with the smallest residual, returned if the residual then diverges.
-  Eigen::MatrixXd best = x;
+  Block best = x.template cast<Scalar>();
   double bestResidual = report.residuals.back();
   while (report.iterations < options.maxIterations && report.residuals.back() > options.tolerance) {
     reportSolveProgress(progress, report, options.maxIterations, options.tolerance);
     start = Clock::now();
-    symmetricProduct(a, p, ap);
+    a.product(p, w);
     report.times.matvec += secondsSince(start);
     start = Clock::now();
-    const Eigen::RowVectorXd pap = columnDots(p, ap);
+    const Eigen::RowVectorXd pap = columnDots(p, w);
     Eigen::RowVectorXd alpha(b.cols());
     for (Eigen::Index c = 0; c < b.cols(); ++c) {
       requirePositive(pap(c), !p.col(c).isZero(0.0), "p^T A p", "the matrix", c, report.iterations);
       alpha(c) = pap(c) > 0.0 ? rz(c) / pap(c) : 0.0;
     }
-    x.noalias() += p * alpha.asDiagonal();
-    r.noalias() -= ap * alpha.asDiagonal();
-    report.rmsChange.push_back((p * alpha.asDiagonal()).norm() /
+    x.noalias() += p.template cast<double>() * alpha.asDiagonal();
+    r.noalias() -= w.template cast<double>() * alpha.asDiagonal();
+    report.rmsChange.push_back((p.template cast<double>() * alpha.asDiagonal()).norm() /
                                std::sqrt(std::max<double>(1.0, double(p.size()))));
     report.times.other += secondsSince(start);
     precondition();
     start = Clock::now();
-    const Eigen::RowVectorXd rzNew = columnDots(r, z);
+    const Eigen::RowVectorXd rzNew = columnDots(r, w);
     for (Eigen::Index c = 0; c < b.cols(); ++c) {
       requirePositive(rzNew(c), !r.col(c).isZero(0.0), "r^T z", "the preconditioner", c,
                       report.iterations);
       const double beta = rz(c) > 0.0 ? rzNew(c) / rz(c) : 0.0;
-      p.col(c) = z.col(c) + beta * p.col(c);
+      p.col(c) = w.col(c) + static_cast<Scalar>(beta) * p.col(c);
     }
     rz = rzNew;
     ++report.iterations;
@@ -142,9 +164,9 @@ SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen:
     report.times.other += secondsSince(start);
     if (residual < bestResidual) {
       bestResidual = residual;
-      best = x;
+      best = x.template cast<Scalar>();
     } else if (residual > kCgDivergenceGrowth * bestResidual) {
-      x = best;
+      x = best.template cast<double>();
       report.diverged = true;
       break;
     }
@@ -152,6 +174,26 @@ SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen:
   report.converged = !report.diverged && report.residuals.back() <= options.tolerance;
   reportSolveProgress(progress, report, options.maxIterations, options.tolerance, true);
   return report;
+}
+
+template SolveReport conjugateGradient<float>(const CgOperator<float>&, const Eigen::MatrixXd&,
+                                              Eigen::MatrixXd&, const CgOptions&,
+                                              const ProgressCallback&);
+template SolveReport conjugateGradient<double>(const CgOperator<double>&, const Eigen::MatrixXd&,
+                                               Eigen::MatrixXd&, const CgOptions&,
+                                               const ProgressCallback&);
+
+SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,
+                              Eigen::MatrixXd& x, const Preconditioner& preconditioner,
+                              const CgOptions& options, const ProgressCallback& progress) {
+  if (a.rows() != a.cols())
+    throw InvalidInputError("conjugateGradient: A is " + std::to_string(a.rows()) + " x " +
+                            std::to_string(a.cols()) + "; expected a square matrix");
+  CgOperator<double> op;
+  op.rows = a.rows();
+  op.product = [&a](const Eigen::MatrixXd& p, Eigen::MatrixXd& ap) { symmetricProduct(a, p, ap); };
+  op.preconditioner = preconditioner;
+  return conjugateGradient(op, b, x, options, progress);
 }
 
 }  // namespace texgrad

@@ -82,6 +82,50 @@ double sumOfSquares(const T* v, size_t n) {
       [](double a, double b) { return a + b; });
 }
 
+/// -(A x) on the interior slots of one colour run of one channel plane (0 on masked slots), in
+/// difference form with double accumulation: sum_k w_k (x_k - x_s) + rowSum_s x_s. The
+/// coefficients' float rounding then perturbs only the differences, never the small row sum (the
+/// screening term), and no large terms cancel in float: A x to double-like accuracy for smooth x.
+template <typename T>
+void negatedProductRun(int64_t n, const T* w, const T* rowSum, const T* up, const T* mid,
+                       const T* down, T* y) {
+  const T* inverse = w + detail::kInverseDiagonal * n;
+  auto term = [&](int plane, int64_t i, T neighbour, double centre) {
+    return double(w[plane * n + i]) * (double(neighbour) - centre);
+  };
+  for (int64_t i = 0; i < n; ++i) {
+    const int64_t j = 2 * i;
+    const double c = mid[j];
+    const double value = ((term(0, i, up[j - 1], c) + term(1, i, up[j], c)) +
+                          (term(2, i, up[j + 1], c) + term(3, i, mid[j - 1], c))) +
+                         ((term(5, i, mid[j + 1], c) + term(6, i, down[j - 1], c)) +
+                          (term(7, i, down[j], c) + term(8, i, down[j + 1], c))) +
+                         double(rowSum[j]) * c;
+    y[j] = inverse[i] == T(0) ? T(0) : static_cast<T>(-value);
+  }
+}
+
+/// r = -(A x) on the interior slots of every run (0 on their other slots), negatedProductRun
+/// on each colour and channel plane.
+template <typename T>
+void negatedInteriorProduct(const detail::LevelSystem& sys, const T* stencil, const T* rowSums,
+                            const T* x, T* r, int k) {
+  const int64_t plane = sys.slotCount();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, sys.boxRows.size(), detail::kRowGrain),
+                    [&](const tbb::blocked_range<size_t>& range) {
+                      for (size_t i = range.begin(); i != range.end(); ++i) {
+                        const detail::SlotRow& row = sys.boxRows[i];
+                        for (int q = 0; q < 2; ++q)
+                          for (int c = 0; c < k; ++c) {
+                            const int64_t s0 = c * plane + row.begin + q;
+                            negatedProductRun<T>(row.runLength(q), stencil + row.coeffsOf(q),
+                                                 rowSums + row.begin + q, x + s0 - row.width,
+                                                 x + s0, x + s0 + row.width, r + s0);
+                          }
+                      }
+                    });
+}
+
 }  // namespace
 
 void MultigridOptions::validate() const {
@@ -127,6 +171,7 @@ struct MultigridSolver<Scalar>::Impl {
   GridHierarchy hierarchy;
   std::vector<Level> levels;
   std::vector<int64_t> nonZeros;  // per level, of A^l
+  std::vector<T> rowSums;         // per slot of level 0: sum of A^0's row (applyOperator)
   CholmodSolver coarseSolver;
   Eigen::MatrixXd coarseWork;
   MultigridStats stats;
@@ -192,6 +237,7 @@ struct MultigridSolver<Scalar>::Impl {
           detail::classifyLevel(grid, a, l == 0 ? options.weakRowReach : 0, lv.sys);
         if (numericPhase) {
           detail::indexUnknowns(grid, lv.sys);
+          if (l == 0) assignRowSums(grid, a);
           detail::assignBoundary(grid, a, lv.sys);
           detail::assignStencils<T>(grid, a, lv.sys, lv.stencil);
           detail::assignLines<T>(grid, a, lv.sys, options.lineRatio, lv.lines, lv.lineCoeffs);
@@ -210,6 +256,20 @@ struct MultigridSolver<Scalar>::Impl {
         a = SparseSum(coarse);
       }
     }
+  }
+
+  /// rowSums from the level-0 operator (columns of the symmetric A: its rows).
+  void assignRowSums(const GridLevel& grid, const SparseSum& a) {
+    rowSums.assign(static_cast<size_t>(grid.slotCount), T(0));
+    tbb::parallel_for(tbb::blocked_range<int>(0, grid.unknownCount(), 4096),
+                      [&](const tbb::blocked_range<int>& range) {
+                        for (int u = range.begin(); u != range.end(); ++u) {
+                          double sum = 0.0;
+                          for (int e = a.outer()[u]; e < a.outer()[u + 1]; ++e) sum += a.value(e);
+                          rowSums[static_cast<size_t>(grid.slotOfUnknown[static_cast<size_t>(u)])] =
+                              static_cast<T>(sum);
+                        }
+                      });
   }
 
   void buildHierarchy(const TexelGrid& grid) {
@@ -375,6 +435,19 @@ struct MultigridSolver<Scalar>::Impl {
     }
   }
 
+  /// z = V(r): one V-cycle from zero on level 0's vectors, z in double or Scalar.
+  template <typename Dst>
+  void preconditionTo(const Eigen::MatrixXd& r, Dst& z) {
+    z.resize(r.rows(), r.cols());
+    arena.execute([&] {
+      ensureChannels(static_cast<int>(r.cols()));
+      scatter(r, levels.front().b);
+      std::fill(levels.front().x.begin(), levels.front().x.end(), T(0));
+      vCycle();
+      gather(levels.front().x, z);
+    });
+  }
+
   /// ||b - A x||_F at level 0 (uses level 0's r as scratch).
   double residualNorm() {
     Level& lv = levels.front();
@@ -533,14 +606,35 @@ double MultigridSolver<Scalar>::refine(const Eigen::MatrixXd& b, Eigen::MatrixXd
 
 template <typename Scalar>
 void MultigridSolver<Scalar>::precondition(const Eigen::MatrixXd& r, Eigen::MatrixXd& z) const {
+  impl_->preconditionTo(r, z);
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::preconditionInto(const Eigen::MatrixXd& r, Matrix& z) const {
+  impl_->preconditionTo(r, z);
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::applyOperator(const Matrix& x, Matrix& y) const {
   Impl& m = *impl_;
-  z.resize(r.rows(), r.cols());
+  const int n = m.hierarchy.levelCount() > 0 ? m.hierarchy.level(0).unknownCount() : 0;
+  if (x.rows() != n)
+    throw InvalidInputError("MultigridSolver::applyOperator: x has " + std::to_string(x.rows()) +
+                            " rows; expected " + std::to_string(n));
+  y.resize(x.rows(), x.cols());
   m.arena.execute([&] {
-    m.ensureChannels(static_cast<int>(r.cols()));
-    m.scatter(r, m.levels.front().b);
-    std::fill(m.levels.front().x.begin(), m.levels.front().x.end(), Scalar(0));
-    m.vCycle();
-    m.gather(m.levels.front().x, z);
+    m.ensureChannels(static_cast<int>(x.cols()));
+    auto& lv = m.levels.front();
+    const int64_t plane = lv.sys.slotCount();
+    m.scatter(x, lv.x);
+    negatedInteriorProduct(lv.sys, lv.stencil.data(), m.rowSums.data(), lv.x.data(), lv.r.data(),
+                           m.channels);
+    // Boundary rows in double: r = b - A x with b = 0 there.
+    for (int c = 0; c < m.channels; ++c)
+      for (const int64_t s : lv.sys.boundarySlots) lv.b[static_cast<size_t>(c * plane + s)] = 0;
+    detail::boundaryResidual(lv.sys, lv.b.data(), lv.x.data(), lv.r.data(), m.channels, lv.work);
+    m.gather(lv.r, y);
+    y = -y;
   });
 }
 
@@ -621,6 +715,7 @@ template <typename Scalar>
 int64_t MultigridSolver<Scalar>::storageBytes() const {
   const Impl& m = *impl_;
   int64_t bytes = m.hierarchy.storageBytes() + m.coarseSolver.storageBytes() +
+                  capacityBytes(m.rowSums) +
                   static_cast<int64_t>(m.coarseWork.size()) * int64_t(sizeof(double));
   for (const auto& lv : m.levels) {
     bytes += lv.sys.storageBytes() + capacityBytes(lv.stencil, lv.x, lv.b, lv.r, lv.lineCoeffs) +

@@ -35,7 +35,8 @@ struct SolverSettings {
   MultigridOptions multigrid;  ///< levels, sweeps, threads
   /// Float V-cycles (factorisations stay double); the residual is formed in double each cycle
   /// (mixed-precision refinement, or the double-precision CG around a float V-cycle), so float
-  /// cycles reach double-precision accuracy. If a refinement cycle makes the residual diverge
+  /// cycles reach double-precision accuracy (CG to a tolerance of kFloatOperatorTolerance or
+  /// more applies A in float, see there). If a refinement cycle makes the residual diverge
   /// (float rounding on a nearly singular A), the solver undoes it and changes to double cycles
   /// for good (SystemSolver::settings() then says so).
   bool singlePrecision = true;
@@ -50,17 +51,34 @@ struct SolverSettings {
   double tolerance = 0.0;
   /// The relative residual MultigridCg stops at when tolerance is 0.
   static constexpr double kDefaultCgTolerance = 1e-8;
+  /// MultigridCg with float cycles and an effective tolerance of at least this applies A through
+  /// the multigrid's level-0 operator (float interior stencils: A to ~1e-7 relative to |A| |x|)
+  /// with float direction and work vectors, and keeps no double copy of A; below it, CG runs
+  /// entirely in double on a kept A. Double cycles' level-0 operator is A in double: CG always
+  /// uses it. (Spot at 2048², filter --beta 0: see docs/memory.md.)
+  static constexpr double kFloatOperatorTolerance = 1e-6;
+  /// True if MultigridCg applies A through the multigrid's level-0 operator (see above).
+  bool cgUsesLevelZeroOperator() const;
   /// The relative residual this kind stops at: tolerance, or the kind's default for 0.
   double effectiveTolerance() const;
   /// Throws InvalidInputError naming the first bad field and its accepted range.
   void validate() const;
 };
 
+/// Whether a SystemSolver keeps its own copy of A after update (SystemSolver::matrix()).
+enum class MatrixCopy {
+  /// Only where its solves use it: Direct (residuals), Multigrid with float cycles (refinement
+  /// residuals, the switch to double cycles), MultigridCg unless cgUsesLevelZeroOperator().
+  WhenNeeded,
+  Kept,  ///< always, for callers that read matrix()
+};
+
 /// Solves A X = B repeatedly for one texel grid and one sparsity pattern of A.
 class SystemSolver {
  public:
   /// Keeps a reference to `grid`, which must outlive the solver.
-  SystemSolver(const TexelGrid& grid, const SolverSettings& settings);
+  SystemSolver(const TexelGrid& grid, const SolverSettings& settings,
+               MatrixCopy copy = MatrixCopy::WhenNeeded);
   ~SystemSolver();
   SystemSolver(SystemSolver&&) noexcept;
   SystemSolver& operator=(SystemSolver&&) noexcept;
@@ -69,8 +87,8 @@ class SystemSolver {
   /// interior/boundary split, MultigridOptions::weakRowReach; the direct solver ignores them).
   void init(const Eigen::SparseMatrix<double>& pattern);
   /// Numeric phase for a new A with the same pattern (new alpha, beta or metric). The solver
-  /// keeps a copy of A for residuals. Reports stage "solver setup" to `progress` before (0) and
-  /// after (1) the factorisations, which cannot be cancelled while they run.
+  /// keeps a copy of A where MatrixCopy says so. Reports stage "solver setup" to `progress` before
+  /// (0) and after (1) the factorisations, which cannot be cancelled while they run.
   void update(const Eigen::SparseMatrix<double>& a, const ProgressCallback& progress = {});
   /// As update, but takes over a's storage (a temporary, or std::move(a): a is left empty)
   /// instead of copying it. Eigen 3.4's SparseMatrix has no move constructor or assignment, so
@@ -97,10 +115,15 @@ class SystemSolver {
   /// residual with measureResidual false (the cycle then skips computing it). Other kinds and
   /// double cycles: step.
   SolveReport refine(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, bool measureResidual = true);
-  /// ||b - A x|| / ||b|| in double (one sparse product; ||A x|| if b = 0).
+  /// ||b - A x|| / ||b|| in double (one sparse product; ||A x|| if b = 0). Without a kept A,
+  /// A x is the multigrid's level-0 operator on x rounded to the cycle precision.
   double relativeResidual(const Eigen::MatrixXd& b, const Eigen::MatrixXd& x) const;
-  /// The system matrix A of the last update (compressed).
+  /// The system matrix A of the last update (compressed). Throws Error if the solver keeps no
+  /// copy (construct it with MatrixCopy::Kept to read this).
   const Eigen::SparseMatrix<double>& matrix() const;
+  /// Bytes held between solves: the kept copy of A (if any), the multigrid hierarchy or the
+  /// direct factorisation, and the refinement vectors (docs/memory.md).
+  int64_t storageBytes() const;
   /// Multigrid hierarchy summary, or a one-line description for the direct solver.
   std::string summary() const;
   /// Seconds spent in init and in the last update.

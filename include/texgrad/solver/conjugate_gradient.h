@@ -27,6 +27,34 @@ using Preconditioner = std::function<void(const Eigen::MatrixXd& r, Eigen::Matri
 /// between iterations, never by orders of magnitude).
 inline constexpr double kCgDivergenceGrowth = 1e4;
 
+/// A CG system given by its actions on n x k blocks, so that A need not be stored as a matrix.
+/// Directions p, products A p and preconditioned residuals z are Scalar blocks; the iterate, the
+/// residual and every dot product and norm stay double. Float halves the work vectors' memory and
+/// loses nothing with a float multigrid, whose V-cycle and level-0 operator give float results.
+template <typename Scalar>
+struct CgOperator {
+  /// n x k block of the work precision.
+  using Block = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+  Eigen::Index rows = 0;                                   ///< n
+  std::function<void(const Block& p, Block& ap)> product;  ///< ap = A p (A SPD)
+  /// z = M⁻¹ r (M SPD); an empty function means z = r.
+  std::function<void(const Eigen::MatrixXd& r, Block& z)> preconditioner;
+};
+
+/// Preconditioned CG on `a` as conjugateGradient below, with three n x k work blocks (the
+/// residual in double, the direction and one shared for A p and M⁻¹ r in Scalar) and the best
+/// iterate kept in Scalar (returned, rounded to Scalar, if the residual diverges).
+template <typename Scalar>
+SolveReport conjugateGradient(const CgOperator<Scalar>& a, const Eigen::MatrixXd& b,
+                              Eigen::MatrixXd& x, const CgOptions& options = {},
+                              const ProgressCallback& progress = {});
+extern template SolveReport conjugateGradient<float>(const CgOperator<float>&,
+                                                     const Eigen::MatrixXd&, Eigen::MatrixXd&,
+                                                     const CgOptions&, const ProgressCallback&);
+extern template SolveReport conjugateGradient<double>(const CgOperator<double>&,
+                                                      const Eigen::MatrixXd&, Eigen::MatrixXd&,
+                                                      const CgOptions&, const ProgressCallback&);
+
 /// Solves A X = B (A n x n SPD with both triangles stored; B, X n x k) by preconditioned CG, one
 /// independent recurrence per column, starting from X. Non-convergence is reported, not thrown;
 /// so is divergence (SolveReport::diverged, kCgDivergenceGrowth), X then holding the iterate
@@ -44,6 +72,21 @@ SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen:
 template <typename Scalar>
 Preconditioner multigridPreconditioner(const MultigridSolver<Scalar>& solver) {
   return [&solver](const Eigen::MatrixXd& r, Eigen::MatrixXd& z) { solver.precondition(r, z); };
+}
+
+/// A applied by the multigrid's level-0 operator (MultigridSolver::applyOperator) and
+/// preconditioned by one V-cycle from zero, both in the cycle precision: CG with no copy of A.
+/// `solver` must outlive the result.
+template <typename Scalar>
+CgOperator<Scalar> multigridOperator(const MultigridSolver<Scalar>& solver) {
+  CgOperator<Scalar> op;
+  op.rows = solver.hierarchy().levelCount() > 0 ? solver.hierarchy().level(0).unknownCount() : 0;
+  op.product = [&solver](const typename CgOperator<Scalar>::Block& p,
+                         typename CgOperator<Scalar>::Block& ap) { solver.applyOperator(p, ap); };
+  op.preconditioner = [&solver](const Eigen::MatrixXd& r, typename CgOperator<Scalar>::Block& z) {
+    solver.preconditionInto(r, z);
+  };
+  return op;
 }
 
 /// y = A x for a symmetric A with both triangles stored (n x n), x and y n x k; parallel. A may be

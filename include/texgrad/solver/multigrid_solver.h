@@ -122,6 +122,13 @@ class MultigridSolver {
   double refine(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, bool measureResidual = true);
   /// Preconditioner application z = V(r): one V-cycle from z = 0 (double in, double out).
   void precondition(const Eigen::MatrixXd& r, Eigen::MatrixXd& z) const;
+  /// As precondition, with z in the cycle precision (which holds the cycle's result exactly).
+  void preconditionInto(const Eigen::MatrixXd& r, Matrix& z) const;
+  /// y = A x (n x k) with the level-0 operator the cycles hold (no copy of A): interior rows
+  /// from their stencils in difference form, sum_k w_k (x_k - x_u) + (row sum of A) x_u,
+  /// boundary rows in double; x is rounded to Scalar, sums are formed in double. Float stencils
+  /// then perturb only the differences (relative ~6e-8), not the row sums (the screening term).
+  void applyOperator(const Matrix& x, Matrix& y) const;
 
   /// Eigen preconditioner shape: re-runs init's symbolic phase for a new pattern (same grid).
   MultigridSolver& analyzePattern(const Eigen::SparseMatrix<double>& a);
