@@ -4,6 +4,7 @@
 
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bindings.h"
@@ -93,9 +94,8 @@ py::array filter(const py::handle& target, const py::handle& texture, double alp
     options.betaPerCell =
         cellValuesFromMap(domain->grid(), map->image, betaRange.first, betaRange.second);
   Image output = withProgress(progress, [&](const ProgressCallback& callback) {
-    Image result = filterTexture(*domain, input.image, options, callback).image;
-    input.image = Image();  // the input's copy goes before the output array is made
-    return result;
+    // The module's copy of the array is handed over: filterTexture writes the result into it.
+    return filterTexture(*domain, std::move(input.image), options, callback).image;
   });
   return arrayFromImage(std::move(output), sampleTypeFrom(dtype, input.sampleType), input.planar);
 }
