@@ -223,6 +223,17 @@ void validateMesh(const TexturedMesh& mesh, const std::string& what) {
   };
   checkIndices(mesh.triangles, mesh.positions.size(), "vertex", "vertices");
   checkIndices(mesh.uvTriangles, mesh.uvs.size(), "texture coordinate", "texture coordinates");
+  if (!mesh.faceMaterial.empty() && mesh.faceMaterial.size() != mesh.triangles.size())
+    throw InvalidInputError(what + ": " + std::to_string(mesh.faceMaterial.size()) +
+                            " face materials for " + std::to_string(mesh.triangles.size()) +
+                            " faces; give every face a material or none");
+  for (size_t f = 0; f < mesh.faceMaterial.size(); ++f)
+    if (mesh.faceMaterial[f] < -1 ||
+        mesh.faceMaterial[f] >= static_cast<int32_t>(mesh.materials.size()))
+      throw InvalidInputError(what + ": face " + std::to_string(f) + " uses material " +
+                              std::to_string(mesh.faceMaterial[f]) + " but there are " +
+                              std::to_string(mesh.materials.size()) +
+                              " materials (0-based); the file is corrupt, re-export it");
 }
 
 }  // namespace texgrad

@@ -34,7 +34,7 @@ TexturedMesh readGltf(const std::filesystem::path& path);
 /// triangles; UV indices are untouched. Returns the number of vertices removed.
 size_t weldPositions(TexturedMesh& mesh, double tolerance);
 
-/// Checks indices, finiteness and that UVs exist; throws InvalidInputError naming `what`
+/// Checks indices (faces, face materials), finiteness and that UVs exist; throws InvalidInputError naming `what`
 /// (usually the file) and the first bad element.
 void validateMesh(const TexturedMesh& mesh, const std::string& what);
 

@@ -14,6 +14,13 @@ namespace texgrad {
 /// Index triple of a triangle (into positions or into uvs).
 using Triangle = std::array<int32_t, 3>;
 
+/// How a texture is sampled outside [0, 1] along one axis (glTF sampler wrapS / wrapT).
+enum class TextureWrap : uint8_t {
+  Repeat,          ///< the image repeats (glTF's default; OBJ renderers' default)
+  MirroredRepeat,  ///< the image repeats, every other copy mirrored
+  ClampToEdge,     ///< the edge texels extend (OBJ `-clamp on`)
+};
+
 /// A texture referenced by the mesh file: a path on disk or bytes embedded in the asset.
 struct TextureRef {
   std::string slot;                      ///< "baseColor", "normal", "emissive", ...
@@ -22,6 +29,9 @@ struct TextureRef {
   std::string mimeType;                  ///< e.g. "image/png" for embedded images
   std::string origin;  ///< where the file names it, for messages: "material 'red' (map_Kd 'r.png')"
   size_t faces = 0;    ///< faces (triangles) whose material uses this image in this slot
+  std::vector<int32_t> materials;  ///< materials (TexturedMesh::materials) using it in this slot
+  TextureWrap wrapU = TextureWrap::Repeat;  ///< sampling along u outside [0, 1]
+  TextureWrap wrapV = TextureWrap::Repeat;  ///< sampling along v outside [0, 1]
 };
 
 /// Triangle mesh with per-corner texture coordinates (OBJ-style separate index spaces).
@@ -35,6 +45,8 @@ struct TexturedMesh {
   std::vector<Triangle> triangles;         ///< per face: indices into positions
   std::vector<Triangle> uvTriangles;       ///< per face: indices into uvs
   std::vector<TextureRef> textures;        ///< textures the file references (distinct per slot)
+  std::vector<std::string> materials;      ///< material names, in the file's order
+  std::vector<int32_t> faceMaterial;  ///< per face: index into materials, -1 if none; may be empty
   std::vector<std::string> missingFiles;   ///< files the mesh names but that are absent (a .mtl)
   std::filesystem::path sourcePath;        ///< file it was read from (empty if procedural)
 
