@@ -307,15 +307,10 @@ struct SystemSolver::Impl {
       arena.execute([&] { rr = residual(a, b, x, scratch); });
     } else {
       visitMultigrid([&](const auto& solver) {
-        // A x as A x_hi + A x_lo, x_hi = x rounded to the cycle precision (as conjugateGradient).
-        using Block = typename std::decay_t<decltype(solver)>::Matrix;
-        const Block high = x.cast<typename Block::Scalar>();
-        Block product;
-        solver.applyOperator(high, product);
-        scratch = b - product.template cast<double>();
-        solver.applyOperator(
-            (x - high.template cast<double>()).template cast<typename Block::Scalar>(), product);
-        rr = (scratch - product.template cast<double>()).squaredNorm();
+        typename std::decay_t<decltype(solver)>::Matrix p, ap;
+        const auto apply = [&](const auto& in, auto& out) { solver.applyOperator(in, out); };
+        residualOfDoubleIterate(apply, b, x, scratch, p, ap);
+        rr = scratch.squaredNorm();
         return 0;
       });
     }

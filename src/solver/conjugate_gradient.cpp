@@ -103,14 +103,7 @@ SolveReport conjugateGradient(const CgOperator<Scalar>& a, const Eigen::MatrixXd
     a.product(x, w);
     r = b - w;
   } else {
-    // A x as A x_hi + A x_lo with x_hi = x rounded to Scalar: the residual of x itself, not of
-    // x_hi (A would amplify that rounding by its largest eigenvalues). p is free until then.
-    p = x.template cast<Scalar>();
-    a.product(p, w);
-    r = b - w.template cast<double>();
-    p = (x - p.template cast<double>()).template cast<Scalar>();
-    a.product(p, w);
-    r -= w.template cast<double>();
+    residualOfDoubleIterate(a.product, b, x, r, p, w);  // p and w are free until then
   }
   report.times.matvec += secondsSince(start);
   auto precondition = [&] {

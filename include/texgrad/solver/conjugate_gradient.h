@@ -27,6 +27,22 @@ using Preconditioner = std::function<void(const Eigen::MatrixXd& r, Eigen::Matri
 /// between iterations, never by orders of magnitude).
 inline constexpr double kCgDivergenceGrowth = 1e4;
 
+/// r = B - A X for an iterate X in double, with A applied in the work precision of `apply`
+/// (`apply(p, ap)` sets ap = A p on Block-typed n x k blocks) as A x_hi + A x_lo, x_hi = X
+/// rounded to that precision: the residual of X itself, not of x_hi, whose rounding A would
+/// amplify by its largest eigenvalues. `p` and `ap` are work blocks.
+template <typename Block, typename Apply>
+void residualOfDoubleIterate(const Apply& apply, const Eigen::MatrixXd& b, const Eigen::MatrixXd& x,
+                             Eigen::MatrixXd& r, Block& p, Block& ap) {
+  using Scalar = typename Block::Scalar;
+  p = x.template cast<Scalar>();
+  apply(p, ap);
+  r = b - ap.template cast<double>();
+  p = (x - p.template cast<double>()).template cast<Scalar>();
+  apply(p, ap);
+  r -= ap.template cast<double>();
+}
+
 /// A CG system given by its actions on n x k blocks, so that A need not be stored as a matrix.
 /// Directions p, products A p and preconditioned residuals z are Scalar blocks; the iterate, the
 /// residual and every dot product and norm stay double. Float halves the work vectors' memory and
