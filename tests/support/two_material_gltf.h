@@ -33,8 +33,9 @@ inline Image fixtureImage(int seed) {
 
 /// What writeTwoMaterialGltf builds.
 ///
-/// Primitive p (p = 0..3) is the quad [p, p + 1] x [0, 1] (two triangles) with TEXCOORD_0 its
-/// corners in [0, 1]^2 and TEXCOORD_1 = 0.25 + TEXCOORD_0 / 2 (glTF's v down). Materials:
+/// Primitive p (p = 0..3) is the quad [p, p + 1] x [0, 1] (two triangles) with TEXCOORD_0
+/// (x - p, 1 - y), i.e. its corners on [0, 1]^2 unflipped (glTF's v points down), and
+/// TEXCOORD_1 = 0.25 + TEXCOORD_0 / 2. Materials:
 /// 0 "red" (baseColor image 0, CLAMP_TO_EDGE x MIRRORED_REPEAT sampler; normal image 2),
 /// 1 unnamed (baseColor image 1, no sampler), 2 "green" (baseColor image 1 again, through another
 /// texture with a MIRRORED_REPEAT x CLAMP_TO_EDGE sampler). Primitives 0, 1, 2 use materials
@@ -55,13 +56,13 @@ struct TwoMaterialGltf {
         putFloat(c[1]);
         putFloat(0.0f);
       }
-    for (const auto& c : corners) {  // TEXCOORD_0
+    for (const auto& c : corners) {  // TEXCOORD_0: v down, so charts are not flipped
       putFloat(c[0]);
-      putFloat(c[1]);
+      putFloat(1.0f - c[1]);
     }
     for (const auto& c : corners) {  // TEXCOORD_1
       putFloat(0.25f + c[0] / 2);
-      putFloat(0.25f + c[1] / 2);
+      putFloat(0.25f + (1.0f - c[1]) / 2);
     }
     for (const uint16_t i : std::initializer_list<uint16_t>{0, 1, 2, 0, 2, 3})
       bin.append(reinterpret_cast<const char*>(&i), 2);
@@ -99,11 +100,11 @@ struct TwoMaterialGltf {
   "buffers":[{"uri":")" + name +
                              ".bin\",\"byteLength\":" + std::to_string(bin.size()) + R"(}],
   "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":)" +
-                             std::to_string(positionBytes) + R"(,"target":34962},
+                             std::to_string(positionBytes) + R"(,"byteStride":12,"target":34962},
     {"buffer":0,"byteOffset":)" +
                              std::to_string(positionBytes) + R"(,"byteLength":)" +
                              std::to_string(2 * uvBytes) +
-                             R"(,"target":34962},
+                             R"(,"byteStride":8,"target":34962},
     {"buffer":0,"byteOffset":)" +
                              std::to_string(positionBytes + 2 * uvBytes) +
                              R"(,"byteLength":12,"target":34963}],
