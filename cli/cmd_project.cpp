@@ -36,8 +36,7 @@ void runProject(const ProjectArgs& args) {
   if (ec) throw IoError("cannot create the output folder '" + args.outDir + "': " + ec.message());
   checkImageOutputArgs(numbered(args.outDir, "partial", 0).string(), "");
   const ProgressCallback progress = progressDisplay(args.report);
-  TexturedMesh mesh =
-      runStage(progress, "read", [&] { return loadMesh(args.mesh, args.read); });
+  TexturedMesh mesh = runStage(progress, "read", [&] { return loadMesh(args.mesh, args.read); });
   timer.lap("read");
   // Projection reads the basis and S only (surface points, normals): no re-assembly.
   TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(), progress);

@@ -32,8 +32,7 @@ void runTexture(TextureArgs args) {
   const bool best = args.select == "best";
   const std::vector<Camera> cameras = readPhotoCameras(args.photos);
   const ProgressCallback progress = progressDisplay(args.report);
-  TexturedMesh mesh =
-      runStage(progress, "read", [&] { return loadMesh(args.mesh, args.read); });
+  TexturedMesh mesh = runStage(progress, "read", [&] { return loadMesh(args.mesh, args.read); });
   timer.lap("read");
   TexelDomain domain(std::move(mesh), width, height, {}, progress);
   timer.lap("operators");
