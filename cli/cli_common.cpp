@@ -45,13 +45,12 @@ std::string builtinMeshNames() {
   return "sample, sphere, cube, cylinder, square, two-charts, aligned-cube, jittered-cube";
 }
 
-TexturedMesh loadMesh(const std::string& spec, double weldTolerance) {
-  if (!isBuiltin(spec)) {
-    MeshReadOptions options;
-    options.weldTolerance = weldTolerance;
-    options.validate();
-    return readMesh(spec, options);
-  }
+TexturedMesh loadMesh(const std::string& spec, const MeshReadOptions& options) {
+  options.validate();
+  if (!isBuiltin(spec)) return readMesh(spec, options);
+  if (options.uvSet != 0)
+    throw InvalidInputError(spec + " has one UV set (0); --uv-set " +
+                            std::to_string(options.uvSet) + " needs a glTF mesh");
   const std::string name = spec.substr(kBuiltinPrefix.size());
   if (name == "sample") return procedural::sampleTorus();
   if (name == "sphere") return procedural::cubeSphere();
@@ -243,11 +242,16 @@ void printJson(const nlohmann::json& document) {
   std::cout << document.dump(2) << "\n";
 }
 
-void addWeldToleranceOption(CLI::App* cmd, double& tolerance) {
-  cmd->add_option("--weld-tolerance", tolerance,
+void addMeshReadOptions(CLI::App* cmd, MeshReadOptions& options) {
+  cmd->add_option("--weld-tolerance", options.weldTolerance,
                   "Weld 3-D positions closer than this (model units) to recover seams; "
                   "0 = exact matches only")
       ->default_val(0.0)
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--uv-set", options.uvSet,
+                  "UV set to read: glTF TEXCOORD_N (every primitive must have it); OBJ, PLY "
+                  "and builtin meshes have only 0")
+      ->default_val(0)
       ->check(CLI::NonNegativeNumber);
 }
 

@@ -13,13 +13,15 @@
 #include "texgrad/apps/system_solver.h"
 #include "texgrad/core/progress.h"
 #include "texgrad/io/image.h"
+#include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/textured_mesh.h"
 #include "texgrad/solver/solve_report.h"
 
 namespace texgrad::cli {
 
-/// Mesh argument: a file path, or `builtin:NAME` for a procedural mesh (see builtinMeshNames()).
-TexturedMesh loadMesh(const std::string& spec, double weldTolerance);
+/// Mesh argument: a file path read with `options`, or `builtin:NAME` for a procedural mesh (see
+/// builtinMeshNames(); one UV set, so `options.uvSet` must be 0).
+TexturedMesh loadMesh(const std::string& spec, const MeshReadOptions& options);
 
 /// Names accepted after `builtin:` (sample, sphere, cube, cylinder, square, two-charts,
 /// aligned-cube: UVs on texel centres at 256 x 256, its sample texture's size; jittered-cube: the
@@ -53,8 +55,9 @@ int runGuarded(const std::function<void()>& body);
 /// Prints a JSON document to stdout (pretty, newline-terminated).
 void printJson(const nlohmann::json& document);
 
-/// Registers --weld-tolerance (model units; 0 = weld exactly coincident positions only).
-void addWeldToleranceOption(CLI::App* cmd, double& tolerance);
+/// Registers the mesh reader's options: --weld-tolerance (model units; 0 = weld exactly
+/// coincident positions only) and --uv-set (glTF TEXCOORD_N).
+void addMeshReadOptions(CLI::App* cmd, MeshReadOptions& options);
 
 /// Registers --raw (keep the solver's values at barely covered texels; the library's
 /// rawSolution option).

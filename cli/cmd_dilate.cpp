@@ -15,7 +15,7 @@ struct DilateArgs {
   std::string mesh, texture, out, slot = "baseColor", bitDepth;
   DilateOptions options;
   ReportArgs report;
-  double weldTolerance = 0.0;
+  MeshReadOptions read;
 };
 
 /// Image texels whose value the padding changed (all in the gutter: active texels are kept).
@@ -35,7 +35,7 @@ void runDilate(const DilateArgs& args) {
   args.options.validate();
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   StageTimer timer;
-  const TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  const TexturedMesh mesh = loadMesh(args.mesh, args.read);
   requireUvsInImage(mesh);
   const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
   timer.lap("read");
@@ -81,7 +81,7 @@ void addDilateCommand(CLI::App& app) {
   cmd->add_option("--texture-slot", args->slot, "Texture of the mesh to use and replace")
       ->default_val("baseColor");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input texture's"));
-  addWeldToleranceOption(cmd, args->weldTolerance);
+  addMeshReadOptions(cmd, args->read);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runDilate(*args); }); });
 }

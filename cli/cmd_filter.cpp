@@ -19,7 +19,7 @@ struct FilterArgs {
   FilterOptions options;
   SolverArgs solver;
   ReportArgs report;
-  double weldTolerance = 0.0;
+  MeshReadOptions read;
 };
 
 void runFilter(FilterArgs args) {
@@ -29,7 +29,7 @@ void runFilter(FilterArgs args) {
   if (args.options.normalMap && args.slot == "baseColor") args.slot = "normal";
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  TexturedMesh mesh = loadMesh(args.mesh, args.read);
   Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
   const int width = texture.width, height = texture.height;
   reportProgress(progress, "read", 1.0);
@@ -132,7 +132,7 @@ void addFilterCommand(CLI::App& app) {
                   "metallicRoughness, occlusion")
       ->default_val("baseColor");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input texture's"));
-  addWeldToleranceOption(cmd, args->weldTolerance);
+  addMeshReadOptions(cmd, args->read);
   addRawSolutionFlag(cmd, args->options.rawSolution);
   addSolverOptions(cmd, args->solver, FilterOptions().solver);
   addReportOptions(cmd, args->report);

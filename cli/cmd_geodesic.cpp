@@ -31,7 +31,7 @@ struct GeodesicArgs {
   GeodesicOptions options;
   SolverArgs solver;
   ReportArgs report;
-  double weldTolerance = 0.0;
+  MeshReadOptions read;
 };
 
 /// Parses `count` comma-separated numbers ("0.5,0.25"); throws InvalidInputError naming `flag`.
@@ -131,7 +131,7 @@ void runGeodesic(GeodesicArgs args) {
   if (!args.png.empty()) checkImageOutputArgs(args.png, "");
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  TexturedMesh mesh = loadMesh(args.mesh, args.read);
   for (const GeodesicSource& s : sources)  // fail before the expensive operator build
     if (s.kind == GeodesicSource::Kind::Vertex &&
         (s.vertex < 0 || s.vertex >= static_cast<int64_t>(mesh.positions.size())))
@@ -261,7 +261,7 @@ void addGeodesicCommand(CLI::App& app) {
                   "neumann (paper; one system less)")
       ->default_val("average")
       ->check(CLI::IsMember({"average", "neumann"}));
-  addWeldToleranceOption(cmd, args->weldTolerance);
+  addMeshReadOptions(cmd, args->read);
   addSolverOptions(cmd, args->solver, GeodesicOptions().solver);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runGeodesic(*args); }); });

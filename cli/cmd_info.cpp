@@ -20,7 +20,7 @@ struct InfoArgs {
   std::string resolution;
   std::string texture;
   bool json = false;
-  double weldTolerance = 0.0;
+  MeshReadOptions read;
   int maxIds = 20;
 };
 
@@ -92,7 +92,7 @@ void printText(const std::string& name, const AtlasReport& r, const TexturedMesh
 }
 
 void runInfo(const InfoArgs& args) {
-  const TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  const TexturedMesh mesh = loadMesh(args.mesh, args.read);
   const Atlas atlas = buildAtlas(mesh);
   std::optional<TexelGrid> grid;
   std::string resolution = args.resolution;
@@ -130,7 +130,7 @@ void addInfoCommand(CLI::App& app) {
   cmd->add_option("--texture,-t", args->texture,
                   "Texture whose size sets the resolution when --resolution is not given");
   cmd->add_flag("--json", args->json, "Print the report as JSON on stdout (default: text)");
-  addWeldToleranceOption(cmd, args->weldTolerance);
+  addMeshReadOptions(cmd, args->read);
   cmd->add_option("--max-ids", args->maxIds, "How many element ids to list per problem (text)")
       ->default_val(20)
       ->check(CLI::NonNegativeNumber);

@@ -19,7 +19,7 @@ struct LicArgs {
   LicOptions options;
   SolverArgs solver;
   ReportArgs report;
-  double weldTolerance = 0.0;
+  MeshReadOptions read;
 };
 
 FaceVectorField loadField(const LicArgs& args, const TexturedMesh& mesh) {
@@ -43,7 +43,7 @@ void runLic(LicArgs args) {
   const auto [width, height] = parseResolution(args.resolution);
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  TexturedMesh mesh = loadMesh(args.mesh, args.read);
   const FaceVectorField field = loadField(args, mesh);
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
@@ -148,7 +148,7 @@ void addLicCommand(CLI::App& app) {
   cmd->add_flag("--color,--colour", args->colour,
                 "Colour noise (random hues) instead of grey noise");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("8"));
-  addWeldToleranceOption(cmd, args->weldTolerance);
+  addMeshReadOptions(cmd, args->read);
   // Plain V-cycles stall on the anisotropic metric (paper Sec. 8): default to multigrid-CG.
   addSolverOptions(cmd, args->solver, defaultLicSolver());
   addReportOptions(cmd, args->report);

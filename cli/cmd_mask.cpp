@@ -16,7 +16,7 @@ struct MaskArgs {
   std::string out;
   std::string kind = "active";
   std::string bitDepth;
-  double weldTolerance = 0.0;
+  MeshReadOptions read;
   bool quiet = false;
 };
 
@@ -25,7 +25,7 @@ void runMask(const MaskArgs& args) {
   const auto [w, h] = parseResolution(args.resolution);
   checkImageOutputArgs(args.out, args.bitDepth);
   StageTimer timer;
-  const TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  const TexturedMesh mesh = loadMesh(args.mesh, args.read);
   requireUvsInImage(mesh);
   const Atlas atlas = buildAtlas(mesh);
   const TexelGrid grid = buildTexelGrid(mesh, atlas, w, h);
@@ -56,7 +56,7 @@ void addMaskCommand(CLI::App& app) {
       ->check(CLI::IsMember({"active", "boundary", "interior", "chart", "coverage"}));
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("8"));
   cmd->add_flag("--quiet,-q", args->quiet, "No summary line");
-  addWeldToleranceOption(cmd, args->weldTolerance);
+  addMeshReadOptions(cmd, args->read);
   cmd->callback([args] { exitStatus = runGuarded([&] { runMask(*args); }); });
 }
 

@@ -16,7 +16,7 @@ struct ProjectArgs {
   std::string mesh, resolution, outDir;
   PhotoArgs photos;
   ReportArgs report;
-  double weldTolerance = 0.0;
+  MeshReadOptions read;
 };
 
 /// `dir`/`stem`-NN.png for view number `index`.
@@ -36,8 +36,7 @@ void runProject(const ProjectArgs& args) {
   if (ec) throw IoError("cannot create the output folder '" + args.outDir + "': " + ec.message());
   checkImageOutputArgs(numbered(args.outDir, "partial", 0).string(), "");
   const ProgressCallback progress = progressDisplay(args.report);
-  TexturedMesh mesh =
-      runStage(progress, "read", [&] { return loadMesh(args.mesh, args.weldTolerance); });
+  TexturedMesh mesh = runStage(progress, "read", [&] { return loadMesh(args.mesh, args.read); });
   timer.lap("read");
   // Projection reads the basis and S only (surface points, normals): no re-assembly.
   TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(), progress);
@@ -96,7 +95,7 @@ void addProjectCommand(CLI::App& app) {
       ->check(resolutionValidator());
   cmd->add_option("--out-dir", args->outDir, "Folder for partial-NN.png and confidence-NN.png")
       ->required();
-  addWeldToleranceOption(cmd, args->weldTolerance);
+  addMeshReadOptions(cmd, args->read);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runProject(*args); }); });
 }

@@ -17,7 +17,7 @@ struct ReactArgs {
   ReactionDiffusionOptions options;
   SolverArgs solver;
   ReportArgs report;
-  double weldTolerance = 0.0;
+  MeshReadOptions read;
 };
 
 /// Largest --steps accepted.
@@ -50,7 +50,7 @@ void runReact(ReactArgs args) {
   const auto [width, height] = parseResolution(args.resolution);
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  TexturedMesh mesh = loadMesh(args.mesh, args.read);
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
   const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
@@ -129,7 +129,7 @@ void addReactCommand(CLI::App& app) {
       ->default_val("512")
       ->check(resolutionValidator());
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("8"));
-  addWeldToleranceOption(cmd, args->weldTolerance);
+  addMeshReadOptions(cmd, args->read);
   addSolverOptions(cmd, args->solver, defaultReactionSolver());
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runReact(*args); }); });

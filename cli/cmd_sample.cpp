@@ -24,7 +24,7 @@ void runSample(const SampleArgs& args) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw IoError("cannot create folder " + dir.string() + ": " + ec.message());
-  const TexturedMesh mesh = loadMesh("builtin:" + args.mesh, 0.0);
+  const TexturedMesh mesh = loadMesh("builtin:" + args.mesh, {});
   const Image texture = procedural::sampleTexture(args.size, args.size);
   writeImage(dir / (args.mesh + ".png"), texture, PixelFormat::UInt8);
   writeObj(dir / (args.mesh + ".obj"), mesh, args.mesh + ".png");

@@ -14,7 +14,7 @@ struct SeamsArgs {
   std::string mesh, texture, out, mask, slot = "baseColor", bitDepth;
   SeamsOptions options;
   ReportArgs report;
-  double weldTolerance = 0.0;
+  MeshReadOptions read;
 };
 
 void runSeams(const SeamsArgs& args) {
@@ -22,7 +22,7 @@ void runSeams(const SeamsArgs& args) {
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  TexturedMesh mesh = loadMesh(args.mesh, args.read);
   const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
   const Image mask = args.mask.empty() ? Image() : readImage(args.mask);
   reportProgress(progress, "read", 1.0);
@@ -81,7 +81,7 @@ void addSeamsCommand(CLI::App& app) {
   cmd->add_option("--texture-slot", args->slot, "Texture of the mesh to use and replace")
       ->default_val("baseColor");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input's"));
-  addWeldToleranceOption(cmd, args->weldTolerance);
+  addMeshReadOptions(cmd, args->read);
   addRawSolutionFlag(cmd, args->options.rawSolution);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runSeams(*args); }); });

@@ -17,7 +17,7 @@ struct StitchArgs {
   StitchOptions options;
   SolverArgs solver;
   ReportArgs report;
-  double weldTolerance = 0.0;
+  MeshReadOptions read;
 };
 
 /// Expands a printf pattern with one integer (e.g. 'texels-%02d.png') for 0, 1, ... while files
@@ -64,7 +64,7 @@ void runStitch(StitchArgs args) {
         "--confidence");
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  TexturedMesh mesh = loadMesh(args.mesh, args.read);
   Image composite, segments;
   std::vector<Image> partials, confidences;
   if (compositeMode) {
@@ -143,7 +143,7 @@ void addStitchCommand(CLI::App& app) {
                 "with the surface normal, exp(a + b . n), which also removes smooth per-view "
                 "shading");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input's"));
-  addWeldToleranceOption(cmd, args->weldTolerance);
+  addMeshReadOptions(cmd, args->read);
   addRawSolutionFlag(cmd, args->options.rawSolution);
   SolverSettings solverDefaults;
   solverDefaults.cycles = 10;

@@ -19,7 +19,7 @@ struct TextureArgs {
   DilateOptions dilate;
   SolverArgs solver;
   ReportArgs report;
-  double weldTolerance = 0.0;
+  MeshReadOptions read;
 };
 
 void runTexture(TextureArgs args) {
@@ -32,8 +32,7 @@ void runTexture(TextureArgs args) {
   const bool best = args.select == "best";
   const std::vector<Camera> cameras = readPhotoCameras(args.photos);
   const ProgressCallback progress = progressDisplay(args.report);
-  TexturedMesh mesh =
-      runStage(progress, "read", [&] { return loadMesh(args.mesh, args.weldTolerance); });
+  TexturedMesh mesh = runStage(progress, "read", [&] { return loadMesh(args.mesh, args.read); });
   timer.lap("read");
   TexelDomain domain(std::move(mesh), width, height, {}, progress);
   timer.lap("operators");
@@ -132,7 +131,7 @@ void addTextureCommand(CLI::App& app) {
       ->default_val(4)
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the photos'"));
-  addWeldToleranceOption(cmd, args->weldTolerance);
+  addMeshReadOptions(cmd, args->read);
   SolverSettings solverDefaults;
   solverDefaults.cycles = 10;
   solverDefaults.maxIterations = 200;

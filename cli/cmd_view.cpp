@@ -16,7 +16,7 @@ namespace {
 
 struct ViewArgs {
   std::string mesh, texture, app = "filter", resolution, out, composite, segments;
-  double weldTolerance = 0.0;
+  MeshReadOptions read;
   viewer::ViewerAppOptions appOptions;
   viewer::SessionOptions session;
   viewer::ServerOptions server;
@@ -51,7 +51,7 @@ void runView(ViewArgs& args) {
   if (stitch && args.composite.empty()) args.composite = args.texture;
   if (stitch && (args.composite.empty() || args.segments.empty()))
     throw InvalidInputError("--app stitch needs --composite TEXTURE and --segments MASK");
-  TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
+  TexturedMesh mesh = loadMesh(args.mesh, args.read);
   Image texture = stitch ? readImage(args.composite) : loadTexture(mesh, args.mesh, args.texture);
   if (stitch) {
     args.appOptions.segments = readImage(args.segments);
@@ -150,7 +150,7 @@ void addViewCommand(CLI::App& app) {
   cmd->add_option("--max-iterations", args->session.maxIterations,
                   "Steps after a change before the solver idles")
       ->default_val(400);
-  addWeldToleranceOption(cmd, args->weldTolerance);
+  addMeshReadOptions(cmd, args->read);
   cmd->callback([args] { exitStatus = runGuarded([&] { runView(*args); }); });
 }
 

@@ -219,15 +219,17 @@ void registerMesh(py::module_& m) {
 
   m.def(
       "read_mesh",
-      [](const std::filesystem::path& path, double weldTolerance) {
+      [](const std::filesystem::path& path, double weldTolerance, int uvSet) {
         MeshReadOptions options;
         options.weldTolerance = weldTolerance;
+        options.uvSet = uvSet;
         py::gil_scoped_release release;
         return std::make_shared<TexturedMesh>(readMesh(path, options));
       },
-      py::arg("path"), py::kw_only(), py::arg("weld_tolerance") = 0.0,
+      py::arg("path"), py::kw_only(), py::arg("weld_tolerance") = 0.0, py::arg("uv_set") = 0,
       "Reads a mesh file the CLI reads (.obj with its .mtl, .ply, .gltf, .glb), welding "
-      "positions closer than weld_tolerance (model units) so seams are found.");
+      "positions closer than weld_tolerance (model units) so seams are found; uv_set picks "
+      "glTF's TEXCOORD_N (OBJ and PLY have only 0).");
 
   m.def(
       "read_image",

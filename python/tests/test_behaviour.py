@@ -1,7 +1,9 @@
 """What users rely on: bad input raises a Python exception naming the argument (never a crash),
 any dtype and memory order, progress callbacks, Ctrl-C, and the GIL released during solves."""
 
+import base64
 import io
+import json
 import os
 import signal
 import threading
@@ -316,3 +318,38 @@ def test_every_solving_app_reports_its_solve(square, app):
     calls[app](lambda stage, fraction: seen.append((stage, fraction)))
     solves = [f for stage, f in seen if "solve" in stage or "sharpen" in stage]
     assert solves and solves[-1] == 1.0, seen
+
+
+def write_two_uv_set_gltf(path, second_set=True):
+    """A one-triangle glTF with TEXCOORD_0 and TEXCOORD_1 = TEXCOORD_0 / 2 (or without set 1)."""
+    positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+    uv0 = np.array([[0, 1], [1, 1], [0, 0]], np.float32)  # glTF's v points down
+    data = positions.tobytes() + uv0.tobytes() + (uv0 / 2).tobytes()
+    attributes = {"POSITION": 0, "TEXCOORD_0": 1}
+    if second_set:
+        attributes["TEXCOORD_1"] = 2
+    views = [{"buffer": 0, "byteOffset": offset, "byteLength": length}
+             for offset, length in ((0, 36), (36, 24), (60, 24))]
+    accessors = [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                  "min": [0, 0, 0], "max": [1, 1, 0]},
+                 {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"},
+                 {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC2"}]
+    uri = "data:application/octet-stream;base64," + base64.b64encode(data).decode()
+    path.write_text(json.dumps({
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": attributes}]}],
+        "buffers": [{"byteLength": len(data), "uri": uri}],
+        "bufferViews": views, "accessors": accessors}))
+    return path
+
+
+def test_read_mesh_reads_the_uv_set_asked(tmp_path):
+    path = write_two_uv_set_gltf(tmp_path / "two_sets.gltf")
+    first = texgrad.read_mesh(path).atlas_report()["chart_uv_areas"]
+    second = texgrad.read_mesh(path, uv_set=1).atlas_report()["chart_uv_areas"]
+    assert first == pytest.approx([0.5])
+    assert second == pytest.approx([0.125])
+    missing = write_two_uv_set_gltf(tmp_path / "one_set.gltf", second_set=False)
+    with pytest.raises(ValueError, match="primitive 0 has no TEXCOORD_1"):
+        texgrad.read_mesh(missing, uv_set=1)

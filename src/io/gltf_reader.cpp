@@ -1,5 +1,6 @@
 // glTF 2.0 input (.gltf / .glb through tinygltf): every triangle primitive of the default scene
-// with its node transform applied, TEXCOORD_0 flipped to v-up, material textures as references.
+// with its node transform applied, one UV set (TEXCOORD_N) flipped to v-up, each face's material,
+// and the materials' textures as references with their samplers' wrap modes.
 #include <tiny_gltf.h>
 
 #include <Eigen/Geometry>
@@ -12,9 +13,9 @@
 #include <map>
 #include <string>
 
+#include "gltf_common.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/mesh_reader.h"
-#include "gltf_common.h"
 
 namespace texgrad {
 namespace {
@@ -170,24 +171,25 @@ int attribute(const tinygltf::Primitive& primitive, const std::string& name) {
 
 void appendPrimitive(TexturedMesh& mesh, const tinygltf::Model& model,
                      const tinygltf::Primitive& primitive, const Eigen::Matrix4d& transform,
-                     const std::string& where) {
+                     int uvSet, const std::string& where) {
   if (primitive.mode != -1 && primitive.mode != TINYGLTF_MODE_TRIANGLES)
     throw UnsupportedError(where + " has mode " + std::to_string(primitive.mode) +
                            " (points, lines, strips or fans); texgrad reads TRIANGLES only, "
                            "re-export with triangle lists");
   const int positionAccessor = attribute(primitive, "POSITION");
-  const int uvAccessor = attribute(primitive, "TEXCOORD_0");
+  const std::string uvName = "TEXCOORD_" + std::to_string(uvSet);
+  const int uvAccessor = attribute(primitive, uvName);
   if (positionAccessor < 0) throw InvalidInputError(where + " has no POSITION attribute");
   if (uvAccessor < 0)
-    throw InvalidInputError(where +
-                            " has no TEXCOORD_0; UV-unwrap the mesh and export it "
-                            "with texture coordinates");
+    throw InvalidInputError(where + " has no " + uvName +
+                            (uvSet == 0 ? "; UV-unwrap the mesh and export it with texture "
+                                          "coordinates"
+                                        : "; choose a UV set every primitive has"));
   const AccessorView positions(model, positionAccessor, where + " POSITION");
-  const AccessorView uvs(model, uvAccessor, where + " TEXCOORD_0");
+  const AccessorView uvs(model, uvAccessor, where + " " + uvName);
   if (positions.components() != 3 || uvs.components() != 2 || positions.count() != uvs.count())
-    throw InvalidInputError(where +
-                            ": POSITION must be VEC3 and TEXCOORD_0 VEC2 with the same "
-                            "count");
+    throw InvalidInputError(where + ": POSITION must be VEC3 and " + uvName +
+                            " VEC2 with the same count");
   const size_t base = mesh.positions.size();
   if (base + positions.count() > static_cast<size_t>(std::numeric_limits<int32_t>::max()))
     throw UnsupportedError(where + ": more than 2^31 vertices in total");
@@ -217,8 +219,8 @@ struct MaterialUse {
 
 class SceneCollector {
  public:
-  SceneCollector(const tinygltf::Model& model, std::string file)
-      : model_(model), file_(std::move(file)), onPath_(model.nodes.size(), false) {}
+  SceneCollector(const tinygltf::Model& model, std::string file, int uvSet)
+      : model_(model), file_(std::move(file)), uvSet_(uvSet), onPath_(model.nodes.size(), false) {}
 
   void visit(int node, const Eigen::Matrix4d& parent) {
     if (node < 0 || static_cast<size_t>(node) >= model_.nodes.size())
@@ -241,10 +243,16 @@ class SceneCollector {
     for (size_t p = 0; p < m.primitives.size(); ++p) {
       const std::string where = file_ + ": mesh " + std::to_string(index) + " ('" + m.name +
                                 "') primitive " + std::to_string(p);
+      const int material = m.primitives[p].material;
+      if (material >= static_cast<int>(model_.materials.size()))
+        throw InvalidInputError(where + " uses material " + std::to_string(material) +
+                                " but the file has " + std::to_string(model_.materials.size()) +
+                                " materials; the file is corrupt, re-export it");
       const size_t before = mesh_.faceCount();
-      appendPrimitive(mesh_, model_, m.primitives[p], world, where);
-      if (m.primitives[p].material >= 0)
-        materials_.push_back({m.primitives[p].material, mesh_.faceCount() - before});
+      appendPrimitive(mesh_, model_, m.primitives[p], world, uvSet_, where);
+      const size_t added = mesh_.faceCount() - before;
+      mesh_.faceMaterial.insert(mesh_.faceMaterial.end(), added, std::max(material, -1));
+      if (material >= 0) materials_.push_back({material, added});
     }
   }
 
@@ -254,19 +262,50 @@ class SceneCollector {
  private:
   const tinygltf::Model& model_;
   std::string file_;
+  int uvSet_;
   std::vector<bool> onPath_;
   TexturedMesh mesh_;
   std::vector<MaterialUse> materials_;  ///< in primitive order
 };
 
-/// Adds the image of texture `textureIndex` to `slot` unless the slot already holds that image
-/// (several different images mean several texture pages: readMeshTexture refuses them).
-/// `faces` are the faces using it there, added to the slot's count for that image.
+/// glTF sampler wrap code (glTF 2.0 spec, "Samplers") as a TextureWrap.
+TextureWrap wrapOf(int code, const std::string& where) {
+  switch (code) {
+    case TINYGLTF_TEXTURE_WRAP_REPEAT:
+      return TextureWrap::Repeat;
+    case TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT:
+      return TextureWrap::MirroredRepeat;
+    case TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE:
+      return TextureWrap::ClampToEdge;
+    default:
+      throw InvalidInputError(where + " has wrap mode " + std::to_string(code) +
+                              ", not 10497 (REPEAT), 33648 (MIRRORED_REPEAT) or 33071 "
+                              "(CLAMP_TO_EDGE); the file is corrupt, re-export it");
+  }
+}
+
+/// Sets `ref`'s wrap modes from texture `texture`'s sampler (none: REPEAT, the glTF default).
+void readSampler(TextureRef& ref, const tinygltf::Model& model, const tinygltf::Texture& texture,
+                 const std::string& file) {
+  if (texture.sampler < 0) return;
+  const std::string where = file + ": sampler " + std::to_string(texture.sampler);
+  if (static_cast<size_t>(texture.sampler) >= model.samplers.size())
+    throw InvalidInputError(where + " does not exist; the file is corrupt, re-export it");
+  const tinygltf::Sampler& sampler = model.samplers[static_cast<size_t>(texture.sampler)];
+  ref.wrapU = wrapOf(sampler.wrapS, where);
+  ref.wrapV = wrapOf(sampler.wrapT, where);
+}
+
+/// Adds the image of texture `textureIndex` to `slot`, used by material `use.material` on
+/// `use.faces` faces. An image the slot already holds (same file or same embedded bytes) stays one
+/// reference listing every material using it (its sampler is the first such material's);
+/// different images mean several texture pages (readMeshTexture refuses them).
 void addTexture(TexturedMesh& mesh, const tinygltf::Model& model, const ImageBytes& embedded,
-                const std::filesystem::path& folder, const char* slot, int textureIndex,
-                size_t faces) {
+                const std::filesystem::path& folder, const std::string& file, const char* slot,
+                int textureIndex, const MaterialUse& use) {
   if (textureIndex < 0 || static_cast<size_t>(textureIndex) >= model.textures.size()) return;
-  const int source = model.textures[static_cast<size_t>(textureIndex)].source;
+  const tinygltf::Texture& texture = model.textures[static_cast<size_t>(textureIndex)];
+  const int source = texture.source;
   if (source < 0 || static_cast<size_t>(source) >= model.images.size()) return;
   const tinygltf::Image& image = model.images[static_cast<size_t>(source)];
   TextureRef ref;
@@ -281,39 +320,58 @@ void addTexture(TexturedMesh& mesh, const tinygltf::Model& model, const ImageByt
     ref.embedded = it->second;
     ref.mimeType = image.mimeType;
   }
-  ref.faces = faces;
+  const auto material = static_cast<int32_t>(use.material);
   for (TextureRef& t : mesh.textures)
     if (t.slot == ref.slot && t.path == ref.path && t.embedded == ref.embedded) {
-      t.faces += faces;
+      t.faces += use.faces;
+      if (std::find(t.materials.begin(), t.materials.end(), material) == t.materials.end())
+        t.materials.push_back(material);
       return;
     }
+  ref.faces = use.faces;
+  ref.materials.push_back(material);
+  readSampler(ref, model, texture, file);
   mesh.textures.push_back(std::move(ref));
+}
+
+/// Material names in file order ("material N" for an unnamed one).
+std::vector<std::string> materialNames(const tinygltf::Model& model) {
+  std::vector<std::string> names;
+  for (size_t m = 0; m < model.materials.size(); ++m)
+    names.push_back(model.materials[m].name.empty() ? "material " + std::to_string(m)
+                                                    : model.materials[m].name);
+  return names;
 }
 
 }  // namespace
 
-TexturedMesh readGltf(const std::filesystem::path& path) {
+TexturedMesh readGltf(const std::filesystem::path& path, int uvSet) {
   requireReadableFile(path);
   const std::string file = path.string();
+  if (uvSet < 0)
+    throw InvalidInputError(file + ": UV set " + std::to_string(uvSet) +
+                            " does not exist; glTF names UV sets TEXCOORD_0, TEXCOORD_1, ...");
   ImageBytes embedded;
   const tinygltf::Model model = gltf::loadModel(path, captureImage, embedded);
 
-  SceneCollector collector(model, file);
+  SceneCollector collector(model, file, uvSet);
   for (int root : sceneRoots(model)) collector.visit(root, Eigen::Matrix4d::Identity());
   TexturedMesh mesh = std::move(collector.mesh());
+  mesh.materials = materialNames(model);
 
   const std::filesystem::path folder = std::filesystem::absolute(path).parent_path();
   for (const MaterialUse& use : collector.materials()) {
-    if (static_cast<size_t>(use.material) >= model.materials.size()) continue;
     const tinygltf::Material& m = model.materials[static_cast<size_t>(use.material)];
-    addTexture(mesh, model, embedded, folder, "baseColor",
-               m.pbrMetallicRoughness.baseColorTexture.index, use.faces);
-    addTexture(mesh, model, embedded, folder, "normal", m.normalTexture.index, use.faces);
-    addTexture(mesh, model, embedded, folder, "emissive", m.emissiveTexture.index, use.faces);
-    addTexture(mesh, model, embedded, folder, "metallicRoughness",
-               m.pbrMetallicRoughness.metallicRoughnessTexture.index, use.faces);
-    addTexture(mesh, model, embedded, folder, "occlusion", m.occlusionTexture.index, use.faces);
+    const auto add = [&](const char* slot, int texture) {
+      addTexture(mesh, model, embedded, folder, file, slot, texture, use);
+    };
+    add("baseColor", m.pbrMetallicRoughness.baseColorTexture.index);
+    add("normal", m.normalTexture.index);
+    add("emissive", m.emissiveTexture.index);
+    add("metallicRoughness", m.pbrMetallicRoughness.metallicRoughnessTexture.index);
+    add("occlusion", m.occlusionTexture.index);
   }
+  for (TextureRef& t : mesh.textures) std::sort(t.materials.begin(), t.materials.end());
   validateMesh(mesh, file);
   mesh.sourcePath = path;
   return mesh;

@@ -1,6 +1,7 @@
-// glTF write-back: copies a .gltf/.glb asset with one material texture replaced by a PNG that is
-// embedded in the asset. tinygltf parses the source without decoding any image (bytes are only
-// captured) and serialises the edited model to a stream inside writeAtomically.
+// glTF write-back: copies a .gltf/.glb asset with material images replaced by PNGs that are
+// embedded in the asset (one image per texture page of a slot). tinygltf parses the source without
+// decoding any image (bytes are only captured) and serialises the edited model to a stream inside
+// writeAtomically.
 //
 // The output is one self-contained file that can be moved anywhere:
 //  * .glb  - all buffers are merged into buffer 0 (the BIN chunk) and every image is stored in a
@@ -12,33 +13,35 @@
 // the textures and material references that use it (gltf::dropImages), so it never carries a
 // dangling URI, and the caller gets one warning line naming the file.
 //
-// The replaced texture: the first material (in the reader's order: primitives of the drawn scene,
-// then the material list) with a texture in the slot names texture T. Every material slot of that
-// kind pointing at T is redirected; T itself is reused if nothing else refers to it, otherwise a
-// copy (same sampler) is added. The new image takes the old image's index if no other texture
-// uses that image, otherwise it is appended; the old image's embedded bytes are cut out of the
-// buffer when nothing else shares them, so repeated write-backs do not grow a GLB.
+// A replaced image is named by materials: those of a mesh's TextureRef (writeGltfWithTextures), or
+// the first material (in the reader's order: primitives of the drawn scene, then the material
+// list) with a texture in the slot (writeGltfWithTexture). Their slot textures, and every texture
+// showing the same image, form the set T redirected: every material slot of that kind pointing
+// into T follows; a texture of T is reused if nothing else refers to it, otherwise a copy (same
+// sampler) is added. The new image takes an old image's index if no other texture uses that
+// image, otherwise it is appended; the old image's embedded bytes are cut out of the buffer when
+// nothing else shares them, so repeated write-backs do not grow a GLB. Both functions run the
+// same code (writeCopy); only the choice of images differs.
 #include "texgrad/io/gltf_writer.h"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 #include <tiny_gltf.h>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <functional>
 #include <limits>
 #include <map>
+#include <set>
 #include <string_view>
 #include <vector>
 
 #include "gltf_common.h"
 #include "gltf_drop_images.h"
+#include "png_encode.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/atomic_file.h"
 #include "texgrad/io/mesh_reader.h"
@@ -55,8 +58,6 @@ using gltf::sceneRoots;
 
 constexpr std::array<std::string_view, 5> kSlots = {"baseColor", "normal", "emissive",
                                                     "metallicRoughness", "occlusion"};
-/// Largest channel count a PNG holds (grey, grey + alpha, RGB, RGBA).
-constexpr int kMaxChannels = 4;
 /// A GLB's total length is a uint32 (glTF 2.0 spec, "GLB File Format Specification").
 constexpr size_t kMaxGlbBytes = std::numeric_limits<uint32_t>::max();
 
@@ -148,12 +149,12 @@ std::vector<int> materialOrder(const tinygltf::Model& model) {
   return order;
 }
 
-/// Texture index of `slot` in the first material that has one, or -1.
-int findSlotTexture(const tinygltf::Model& model, std::string_view slot) {
+/// The first material (reader order) with a texture in `slot`, or -1.
+int firstSlotMaterial(const tinygltf::Model& model, std::string_view slot) {
   for (int m : materialOrder(model)) {
     if (static_cast<size_t>(m) >= model.materials.size()) continue;
     const int texture = slotIndex(model.materials[static_cast<size_t>(m)], slot);
-    if (texture >= 0 && static_cast<size_t>(texture) < model.textures.size()) return texture;
+    if (texture >= 0 && static_cast<size_t>(texture) < model.textures.size()) return m;
   }
   return -1;
 }
@@ -175,6 +176,24 @@ bool imageUsed(const tinygltf::Model& model, int image) {
   return std::any_of(model.textures.begin(), model.textures.end(), [&](const auto& t) {
     return t.source == image || mentionsIndex(t.extensions, "source", image);
   });
+}
+
+/// The textures one replacement redirects: those `materials` use in `slot`, and every texture
+/// whose image is one of theirs (the reader merges materials by image, so these are one page).
+std::set<int> replacedTextures(const tinygltf::Model& model, std::string_view slot,
+                               const std::vector<int32_t>& materials) {
+  std::set<int> textures, images;
+  for (int32_t m : materials) {
+    if (m < 0 || static_cast<size_t>(m) >= model.materials.size()) continue;
+    const int t = slotIndex(model.materials[static_cast<size_t>(m)], slot);
+    if (t < 0 || static_cast<size_t>(t) >= model.textures.size()) continue;
+    textures.insert(t);
+    const int image = model.textures[static_cast<size_t>(t)].source;
+    if (image >= 0 && static_cast<size_t>(image) < model.images.size()) images.insert(image);
+  }
+  for (size_t t = 0; t < model.textures.size(); ++t)
+    if (images.count(model.textures[t].source) != 0) textures.insert(static_cast<int>(t));
+  return textures;
 }
 
 /// Appends `bytes` to buffer 0 (4-byte aligned) as bufferView `reuse`, or as a new bufferView if
@@ -260,80 +279,6 @@ void mergeBuffers(tinygltf::Model& model) {
   model.buffers[0].uri.clear();
 }
 
-/// Channel names and alpha for a 1-4 channel PNG; colour is stored unpremultiplied.
-OIIO::ImageSpec pngSpec(const Image& image, bool sixteenBit) {
-  OIIO::ImageSpec spec(image.width, image.height, image.channels,
-                       sixteenBit ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8);
-  static const std::array<std::vector<std::string>, kMaxChannels> names{
-      {{"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}}};
-  spec.channelnames = names[static_cast<size_t>(image.channels - 1)];
-  spec.alpha_channel = (image.channels == 2 || image.channels == 4) ? image.channels - 1 : -1;
-  spec.attribute("oiio:UnassociatedAlpha", 1);
-  return spec;
-}
-
-/// Texel-order floats to file-order (top row first) integer samples, clamped and rounded.
-template <typename T>
-std::vector<T> fileOrderSamples(const Image& image) {
-  constexpr float levels = static_cast<float>(std::numeric_limits<T>::max());
-  const size_t row = static_cast<size_t>(image.width) * static_cast<size_t>(image.channels);
-  std::vector<T> out(image.pixels.size());
-  for (size_t j = 0; j < static_cast<size_t>(image.height); ++j) {
-    const size_t from = j * row, to = (static_cast<size_t>(image.height) - 1 - j) * row;
-    for (size_t k = 0; k < row; ++k) {
-      const float v = image.pixels[from + k];
-      const float clamped = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-      out[to + k] = static_cast<T>(std::lround(clamped * levels));
-    }
-  }
-  return out;
-}
-
-std::string oneLine(std::string message) {
-  for (char& c : message)
-    if (c == '\n' || c == '\r') c = ' ';
-  while (!message.empty() && message.back() == ' ') message.pop_back();
-  return message.empty() ? std::string("unknown OpenImageIO error") : message;
-}
-
-/// Encodes `image` as PNG bytes in memory: 8-bit for UInt8, 16-bit for the other formats.
-Bytes encodePng(const Image& image, PixelFormat format, const std::string& where) {
-  const bool sixteenBit = format != PixelFormat::UInt8;
-  Bytes bytes;
-  OIIO::Filesystem::IOVecOutput proxy(bytes);
-  const std::string proxyName = "texgrad-memory.png";
-  auto output = OIIO::ImageOutput::create(proxyName);
-  if (!output) throw IoError(where + oneLine(OIIO::geterror()));
-  OIIO::ImageSpec spec = pngSpec(image, sixteenBit);
-  OIIO::Filesystem::IOProxy* proxyPointer = &proxy;
-  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxyPointer);
-  if (!output->set_ioproxy(&proxy) || !output->open(proxyName, spec))
-    throw IoError(where + oneLine(output->geterror()));
-  const bool ok =
-      sixteenBit
-          ? output->write_image(OIIO::TypeDesc::UINT16, fileOrderSamples<uint16_t>(image).data())
-          : output->write_image(OIIO::TypeDesc::UINT8, fileOrderSamples<uint8_t>(image).data());
-  if (!ok) {
-    const std::string message = oneLine(output->geterror());
-    output->close();
-    throw IoError(where + message);
-  }
-  if (!output->close()) throw IoError(where + oneLine(output->geterror()));
-  return bytes;
-}
-
-void checkImage(const Image& image, const std::string& where) {
-  if (image.width <= 0 || image.height <= 0 || image.channels <= 0)
-    throw InvalidInputError(where + "the image is empty");
-  if (image.channels > kMaxChannels)
-    throw UnsupportedError(where + std::to_string(image.channels) +
-                           " channels; a PNG texture holds 1 to 4");
-  if (image.pixels.size() != image.index(0, image.height))
-    throw InvalidInputError(where + "pixel buffer size does not match " +
-                            std::to_string(image.width) + " x " + std::to_string(image.height) +
-                            " x " + std::to_string(image.channels));
-}
-
 /// The file an external image's URI names, relative to the source asset's folder.
 fs::path imageFile(const tinygltf::Image& image, const fs::path& source) {
   return (fs::absolute(source).parent_path() / percentDecode(image.uri)).lexically_normal();
@@ -393,11 +338,59 @@ void writeModel(const tinygltf::Model& model, const fs::path& path, const fs::pa
     throw IoError("cannot write " + target.string() + ": writing failed (disk full?)");
 }
 
-}  // namespace
+/// One image to replace: the textures whose slot references move to it, and its PNG encoding.
+struct PlannedImage {
+  std::set<int> textures;
+  std::function<Bytes()> png;
+};
 
-std::vector<std::string> writeGltfWithTexture(const fs::path& source, const fs::path& target,
-                                              const std::string& slot, const Image& image,
-                                              std::optional<PixelFormat> format) {
+/// Points the `slot` references to `textures` at a new image holding `png`. A texture also used
+/// elsewhere (another slot, an extension) is copied, keeping its sampler; an old image nothing uses
+/// any more is overwritten in place (its bytes cut out), otherwise the new image is appended.
+void replaceImage(tinygltf::Model& model, std::string_view slot, const std::set<int>& textures,
+                  const Bytes& png) {
+  std::vector<int> redirected;
+  std::set<int> oldImages;
+  for (int texture : textures) {
+    oldImages.insert(model.textures[static_cast<size_t>(texture)].source);
+    int target = texture;
+    if (textureUsedElsewhere(model, texture, slot)) {
+      tinygltf::Texture copy = model.textures[static_cast<size_t>(texture)];
+      model.textures.push_back(std::move(copy));
+      target = static_cast<int>(model.textures.size() - 1);
+      for (auto& m : model.materials)
+        if (slotIndex(m, slot) == texture) slotIndex(m, slot) = target;
+    }
+    tinygltf::Texture& t = model.textures[static_cast<size_t>(target)];
+    t.extensions.clear();  // alternative sources (KHR_texture_basisu, ...) would win
+    t.source = -1;
+    redirected.push_back(target);
+  }
+  tinygltf::Image replacement;
+  replacement.name = slot;
+  replacement.mimeType = "image/png";
+  int newImage = -1;
+  for (int old : oldImages)
+    if (old >= 0 && static_cast<size_t>(old) < model.images.size() && !imageUsed(model, old)) {
+      // The old picture is referenced by nothing else: drop it (and its bytes, if embedded).
+      newImage = old;
+      const int freedView = releaseImageBytes(model, old);
+      replacement.bufferView = appendBufferView(model, png, freedView);
+      if (!model.images[static_cast<size_t>(old)].name.empty())
+        replacement.name = model.images[static_cast<size_t>(old)].name;
+      model.images[static_cast<size_t>(old)] = std::move(replacement);
+      break;
+    }
+  if (newImage < 0) {
+    replacement.bufferView = appendBufferView(model, png);
+    model.images.push_back(std::move(replacement));
+    newImage = static_cast<int>(model.images.size() - 1);
+  }
+  for (int t : redirected) model.textures[static_cast<size_t>(t)].source = newImage;
+}
+
+/// Checks `slot` and `target`'s extension; returns true for a .glb.
+bool checkTarget(const std::string& slot, const fs::path& target) {
   if (std::find(kSlots.begin(), kSlots.end(), slot) == kSlots.end())
     throw InvalidInputError("unknown texture slot '" + slot +
                             "'; use baseColor, normal, emissive, metallicRoughness or occlusion");
@@ -405,57 +398,24 @@ std::vector<std::string> writeGltfWithTexture(const fs::path& source, const fs::
   if (extension != ".gltf" && extension != ".glb")
     throw UnsupportedError("cannot write " + target.string() + ": unknown glTF extension '" +
                            target.extension().string() + "'; use .gltf or .glb");
-  const bool binary = extension == ".glb";
-  const std::string where = "cannot write " + target.string() + ": ";
-  checkImage(image, where);
+  return extension == ".glb";
+}
 
+/// The write-back both public functions share: `plan` picks, from the loaded source model, the
+/// images to replace; each is encoded and stored in turn, then the copy is written atomically.
+std::vector<std::string> writeCopy(
+    const fs::path& source, const fs::path& target, const std::string& slot,
+    const std::function<std::vector<PlannedImage>(const tinygltf::Model&)>& plan) {
+  const bool binary = checkTarget(slot, target);
+  const std::string where = "cannot write " + target.string() + ": ";
   requireReadableFile(source);
   ImageBytes sourceImages;
   tinygltf::Model model = gltf::loadModel(source, captureImage, sourceImages);
-
-  const int texture = findSlotTexture(model, slot);
-  if (texture < 0)
-    throw InvalidInputError(source.string() + " has no " + slot +
-                            " texture to replace; its materials reference none");
-
-  const Bytes png = encodePng(image, format.value_or(image.format), where);
+  const std::vector<PlannedImage> planned = plan(model);
 
   if (model.buffers.empty()) model.buffers.emplace_back();
   if (binary) mergeBuffers(model);
-
-  // Redirect the slot: reuse texture T when only these slots use it, else add a copy.
-  const int oldImage = model.textures[static_cast<size_t>(texture)].source;
-  int newTexture = texture;
-  if (textureUsedElsewhere(model, texture, slot)) {
-    tinygltf::Texture copy = model.textures[static_cast<size_t>(texture)];
-    model.textures.push_back(std::move(copy));
-    newTexture = static_cast<int>(model.textures.size() - 1);
-    for (auto& m : model.materials)
-      if (slotIndex(m, slot) == texture) slotIndex(m, slot) = newTexture;
-  }
-  tinygltf::Texture& redirected = model.textures[static_cast<size_t>(newTexture)];
-  redirected.extensions.clear();  // alternative sources (KHR_texture_basisu, ...) would win
-  redirected.source = -1;
-
-  tinygltf::Image replacement;
-  replacement.name = slot;
-  replacement.mimeType = "image/png";
-  int newImage = -1;
-  if (oldImage >= 0 && static_cast<size_t>(oldImage) < model.images.size() &&
-      !imageUsed(model, oldImage)) {
-    // The old picture is referenced by nothing else: drop it (and its bytes, if embedded).
-    newImage = oldImage;
-    const int freedView = releaseImageBytes(model, oldImage);
-    replacement.bufferView = appendBufferView(model, png, freedView);
-    if (!model.images[static_cast<size_t>(oldImage)].name.empty())
-      replacement.name = model.images[static_cast<size_t>(oldImage)].name;
-    model.images[static_cast<size_t>(oldImage)] = std::move(replacement);
-  } else {
-    replacement.bufferView = appendBufferView(model, png);
-    model.images.push_back(std::move(replacement));
-    newImage = static_cast<int>(model.images.size() - 1);
-  }
-  redirected.source = newImage;
+  for (const PlannedImage& image : planned) replaceImage(model, slot, image.textures, image.png());
 
   const std::vector<int> missing = embedSourceImages(model, sourceImages, source);
   std::vector<std::string> warnings;
@@ -469,6 +429,57 @@ std::vector<std::string> writeGltfWithTexture(const fs::path& source, const fs::
   writeAtomically(target,
                   [&](const fs::path& temporary) { writeModel(model, temporary, target, binary); });
   return warnings;
+}
+
+}  // namespace
+
+std::vector<std::string> writeGltfWithTexture(const fs::path& source, const fs::path& target,
+                                              const std::string& slot, const Image& image,
+                                              std::optional<PixelFormat> format) {
+  checkTarget(slot, target);
+  const std::string where = "cannot write " + target.string() + ": ";
+  png::checkImage(image, where);
+  return writeCopy(source, target, slot, [&](const tinygltf::Model& model) {
+    const int material = firstSlotMaterial(model, slot);
+    if (material < 0)
+      throw InvalidInputError(source.string() + " has no " + slot +
+                              " texture to replace; its materials reference none");
+    return std::vector<PlannedImage>{
+        {replacedTextures(model, slot, {material}),
+         [&] { return png::encodePng(image, format.value_or(image.format), where); }}};
+  });
+}
+
+std::vector<std::string> writeGltfWithTextures(
+    const fs::path& source, const fs::path& target, const std::string& slot,
+    const std::vector<GltfImageReplacement>& replacements, std::optional<PixelFormat> format) {
+  checkTarget(slot, target);
+  const std::string where = "cannot write " + target.string() + ": ";
+  for (const GltfImageReplacement& r : replacements)
+    if (r.texture == nullptr || !r.image || r.texture->slot != slot)
+      throw InvalidInputError(where + "every replaced image needs a " + slot +
+                              " texture of the mesh and a picture");
+  return writeCopy(source, target, slot, [&](const tinygltf::Model& model) {
+    std::vector<PlannedImage> planned;
+    std::set<int> taken;
+    for (const GltfImageReplacement& r : replacements) {
+      const std::string name = source.string() + ": " + slot + " " + r.texture->origin;
+      std::set<int> textures = replacedTextures(model, slot, r.texture->materials);
+      if (textures.empty())
+        throw InvalidInputError(name +
+                                " is used by no material of the asset in that slot; pass "
+                                "a texture of the mesh read from this file");
+      for (int t : textures)
+        if (!taken.insert(t).second)
+          throw InvalidInputError(name + " is replaced twice; give each image one picture");
+      planned.push_back({std::move(textures), [&r, &where, format] {
+                           const Image& image = r.image();
+                           png::checkImage(image, where);
+                           return png::encodePng(image, format.value_or(image.format), where);
+                         }});
+    }
+    return planned;
+  });
 }
 
 }  // namespace texgrad

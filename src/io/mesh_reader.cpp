@@ -120,6 +120,9 @@ void MeshReadOptions::validate() const {
     throw InvalidInputError("weldTolerance must be a finite number >= 0 (got " +
                             formatNumber(weldTolerance) +
                             "); use 0 to weld only identical positions");
+  if (uvSet < 0)
+    throw InvalidInputError("uvSet must be >= 0 (got " + std::to_string(uvSet) +
+                            "); UV sets are numbered from 0 (glTF TEXCOORD_0)");
 }
 
 void requireReadableFile(const std::filesystem::path& path) {
@@ -138,13 +141,20 @@ void requireReadableFile(const std::filesystem::path& path) {
 TexturedMesh readMesh(const std::filesystem::path& path, const MeshReadOptions& options) {
   options.validate();
   const std::string extension = lowercase(path.extension().string());
+  const bool gltf = extension == ".gltf" || extension == ".glb";
+  if (options.uvSet != 0 && (extension == ".obj" || extension == ".ply")) {
+    requireReadableFile(path);
+    throw InvalidInputError(path.string() + ": UV set " + std::to_string(options.uvSet) +
+                            " asked for, but " + extension +
+                            " files hold one UV set (0); UV sets are a glTF feature");
+  }
   TexturedMesh mesh;
   if (extension == ".obj") {
     mesh = readObj(path);
   } else if (extension == ".ply") {
     mesh = readPly(path);
-  } else if (extension == ".gltf" || extension == ".glb") {
-    mesh = readGltf(path);
+  } else if (gltf) {
+    mesh = readGltf(path, options.uvSet);
   } else {
     requireReadableFile(path);
     throw UnsupportedError(path.string() + ": unknown mesh extension '" + extension +

@@ -97,8 +97,19 @@ WrittenTexture writeMeshTexture(const std::filesystem::path& out, const Textured
                                 std::optional<PixelFormat> format) {
   if (!isGltfPath(out)) return {writeImage(out, image, format), {}};
   requireGltfSource(out, mesh.sourcePath);
+  const std::vector<const TextureRef*> refs = slotTextures(mesh, slot);
+  if (refs.size() > 1)
+    throw UnsupportedError("cannot write " + out.string() + ": " + mesh.sourcePath.string() +
+                           " has " + std::to_string(refs.size()) + " " + slot +
+                           " images, and one processed image cannot replace them all; process "
+                           "its texture pages together");
   WrittenTexture written;
-  written.warnings = writeGltfWithTexture(mesh.sourcePath, out, slot, image, format);
+  // A mesh whose faces use no image in the slot: the asset's first slot texture is replaced.
+  written.warnings = refs.empty()
+                         ? writeGltfWithTexture(mesh.sourcePath, out, slot, image, format)
+                         : writeGltfWithTextures(
+                               mesh.sourcePath, out, slot,
+                               {{refs.front(), [&]() -> const Image& { return image; }}}, format);
   // The embedded PNG's depth (writeGltfWithTexture).
   written.stored = format.value_or(image.format) == PixelFormat::UInt8 ? PixelFormat::UInt8
                                                                        : PixelFormat::UInt16;

@@ -3,14 +3,18 @@
 // glTF validator (no errors); so does BoomBox's write-back, whose source lacks its
 // occlusion/roughness/metallic image: the write warns once naming it (not under --quiet) and the
 // copy leaves that texture out. The unmoved BoomBox source must fail validation (the missing
-// file is reported), which shows the check sees a dangling URI.
-// Environment: TEXGRAD_CLI, TEXGRAD_SHARED_DATA, TEXGRAD_VALIDATOR_OUT (a scratch folder).
+// file is reported), which shows the check sees a dangling URI. A two-material asset (two
+// primitives, two base-colour images, gltf_write_pages) validates, and so do its .gltf and .glb
+// write-backs replacing both images at once, after the move.
+// Environment: TEXGRAD_CLI, TEXGRAD_WRITE_PAGES, TEXGRAD_SHARED_DATA, TEXGRAD_VALIDATOR_OUT (a
+// scratch folder).
 import { spawnSync } from "node:child_process";
 import fs from "node:fs";
 import path from "node:path";
 import validator from "gltf-validator";
 
 const cli = process.env.TEXGRAD_CLI;
+const writePages = process.env.TEXGRAD_WRITE_PAGES;
 const data = process.env.TEXGRAD_SHARED_DATA;
 const scratch = process.env.TEXGRAD_VALIDATOR_OUT;
 let failures = 0;
@@ -81,6 +85,18 @@ check(box.status === 0, `BoomBox write-back: status ${box.status}: ${box.err}`);
 check(warnings.length === 1 && warnings[0].includes(missing),
       `expected one warning naming ${missing}, got: ${box.err}`);
 if (box.status === 0) await expectValidAfterMove(path.join(written, "boombox.gltf"), moved);
+
+const pagesDir = path.join(scratch, "pages");
+const pages = spawnSync(writePages, [pagesDir], { encoding: "utf8" });
+check(pages.status === 0 && pages.stdout.startsWith("2 base-colour images replaced"),
+      `gltf_write_pages: status ${pages.status}: ${pages.stdout}${pages.stderr}`);
+if (pages.status === 0) {
+  const fixture = await validate(path.join(pagesDir, "source", "two.gltf"));
+  check(fixture.issues.numErrors === 0,
+        `the two-material source has ${fixture.issues.numErrors} validation errors`);
+  for (const name of ["pages.gltf", "pages.glb"])
+    await expectValidAfterMove(path.join(pagesDir, name), path.join(moved, "pages"));
+}
 
 if (failures > 0) {
   console.error(`${failures} check(s) failed`);

@@ -1,12 +1,14 @@
-// Writes a copy of a glTF asset with one of its textures replaced (glTF write-back).
+// Writes a copy of a glTF asset with some of its textures replaced (glTF write-back).
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "texgrad/io/image.h"
+#include "texgrad/io/textured_mesh.h"
 
 namespace texgrad {
 
@@ -26,5 +28,27 @@ std::vector<std::string> writeGltfWithTexture(const std::filesystem::path& sourc
                                               const std::filesystem::path& target,
                                               const std::string& slot, const Image& image,
                                               std::optional<PixelFormat> format = std::nullopt);
+
+/// The new picture of one image (texture page) of a slot, for writeGltfWithTextures.
+struct GltfImageReplacement {
+  /// The image replaced: a TextureRef of the mesh readGltf read from the source asset (its
+  /// `materials` name the glTF materials, hence the image, it stands for).
+  const TextureRef* texture = nullptr;
+  /// Returns the new picture; called once, while writing, and the reference it returns need only
+  /// live until the next call, so a caller can cut each page out of a larger image in turn.
+  std::function<const Image&()> image;
+};
+
+/// Copies the glTF/GLB asset `source` to `target` like writeGltfWithTexture, with every image in
+/// `replacements` replaced in `slot` (each TextureRef must be of that slot): the `slot` of every
+/// material whose image there is the TextureRef's gets the new picture (one PNG per replacement,
+/// shared by those materials; their samplers are kept). Every other image stays embedded as it
+/// was, and images and textures shared with other slots are not modified. Throws
+/// InvalidInputError if a TextureRef's materials have no image in `slot` in the source, or if two
+/// replacements name the same image; otherwise as writeGltfWithTexture.
+std::vector<std::string> writeGltfWithTextures(
+    const std::filesystem::path& source, const std::filesystem::path& target,
+    const std::string& slot, const std::vector<GltfImageReplacement>& replacements,
+    std::optional<PixelFormat> format = std::nullopt);
 
 }  // namespace texgrad

@@ -11,6 +11,8 @@ namespace texgrad {
 struct MeshReadOptions {
   /// Positions closer than this (in model units) are welded into one 3-D vertex; 0 = exact only.
   double weldTolerance = 0.0;
+  /// UV set to read: glTF's TEXCOORD_N (every primitive must have it); OBJ and PLY have only 0.
+  int uvSet = 0;
   /// Checks the options; throws InvalidInputError naming the bad field.
   void validate() const;
 };
@@ -27,15 +29,18 @@ TexturedMesh readObj(const std::filesystem::path& path);
 /// texture_u/texture_v properties.
 TexturedMesh readPly(const std::filesystem::path& path);
 /// Reads a glTF 2.0 (.gltf) or binary (.glb) asset: all mesh primitives with node transforms
-/// applied, TEXCOORD_0, base-colour/normal/emissive texture references.
-TexturedMesh readGltf(const std::filesystem::path& path);
+/// applied, UV set TEXCOORD_`uvSet`, the materials (faceMaterial from each primitive's), and the
+/// base-colour/normal/emissive/metallicRoughness/occlusion images (one TextureRef per image and
+/// slot, listing its materials, wrap modes from its sampler). A primitive without TEXCOORD_`uvSet`
+/// throws InvalidInputError naming the file, mesh, primitive and set.
+TexturedMesh readGltf(const std::filesystem::path& path, int uvSet = 0);
 
 /// Merges 3-D vertices whose positions lie within `tolerance` (0: bit-identical) and remaps
 /// triangles; UV indices are untouched. Returns the number of vertices removed.
 size_t weldPositions(TexturedMesh& mesh, double tolerance);
 
-/// Checks indices (faces, face materials), finiteness and that UVs exist; throws InvalidInputError naming `what`
-/// (usually the file) and the first bad element.
+/// Checks indices (faces, face materials), finiteness and that UVs exist; throws InvalidInputError
+/// naming `what` (usually the file) and the first bad element.
 void validateMesh(const TexturedMesh& mesh, const std::string& what);
 
 /// Throws IoError "cannot open FILE: reason; ..." unless `path` is a file that can be opened

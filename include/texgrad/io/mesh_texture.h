@@ -30,8 +30,10 @@ struct WrittenTexture {
 };
 
 /// Writes a processed texture of `mesh` to `out`: an image file (writeImage), or, when `out` is
-/// a glTF path, a copy of the mesh's source asset whose `slot` texture is `image`
-/// (writeGltfWithTexture: self-contained; a missing source image is left out with a warning).
+/// a glTF path, a copy of the mesh's source asset whose `slot` image (the one its faces use, by
+/// writeGltfWithTextures; the asset's first if they use none, by writeGltfWithTexture) is
+/// `image`: self-contained; a missing source image is left out with a warning. Throws
+/// UnsupportedError for a glTF output when the faces use several images in the slot.
 /// `format` defaults to image.format. Throws InvalidInputError if a glTF output is asked for a
 /// mesh that was not read from glTF.
 WrittenTexture writeMeshTexture(const std::filesystem::path& out, const TexturedMesh& mesh,
