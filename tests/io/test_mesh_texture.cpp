@@ -92,7 +92,8 @@ TEST(MeshTexture, GltfOutputNeedsAMeshReadFromGltf) {
 TEST(MeshTexture, UndecodableEmbeddedImageNamesMeshAndSlot) {
   TexturedMesh mesh = procedural::square();
   mesh.sourcePath = "model.glb";
-  mesh.textures.push_back({"normal", {}, {'n', 'o', 't', ' ', 'p', 'n', 'g'}, "image/png", ""});
+  mesh.textures.push_back(
+      {"normal", {}, {'n', 'o', 't', ' ', 'p', 'n', 'g'}, "image/png", "", 0, {}});
   try {
     readMeshTexture(mesh, "normal");
     FAIL() << "expected an error";
