@@ -13,6 +13,7 @@
 #include "texgrad/apps/texel_signal.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/image_io.h"
+#include "texgrad/io/uv_tiles.h"
 
 namespace texgrad::cli {
 namespace {
@@ -32,6 +33,7 @@ struct GeodesicArgs {
   SolverArgs solver;
   ReportArgs report;
   double weldTolerance = 0.0;
+  std::string wrap = "auto";
 };
 
 /// Parses `count` comma-separated numbers ("0.5,0.25"); throws InvalidInputError naming `flag`.
@@ -126,7 +128,7 @@ void runGeodesic(GeodesicArgs args) {
   args.options.offset = parseGeodesicOffset(args.offset);
   args.options.boundary = parseGeodesicBoundary(args.boundary);
   args.options.validate();
-  const std::vector<GeodesicSource> sources = parseSources(args);
+  std::vector<GeodesicSource> sources = parseSources(args);
   checkImageOutputArgs(args.out, "");
   if (!args.png.empty()) checkImageOutputArgs(args.png, "");
   const ProgressCallback progress = progressDisplay(args.report);
@@ -139,6 +141,10 @@ void runGeodesic(GeodesicArgs args) {
                               args.mesh + " has " + std::to_string(mesh.positions.size()) +
                               " vertices (0-based)");
   const auto [width, height] = chooseResolution(args, mesh);
+  const UvWrap wrap = parseUvWrap(args.wrap, mesh, "baseColor");
+  for (GeodesicSource& s : sources)  // a UV source moves with the faces around it
+    if (s.kind == GeodesicSource::Kind::Uv) s.uv = wrapUvPoint(s.uv, wrap);
+  mesh = wrapTextureCoordinates(std::move(mesh), wrap).mesh;
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
   const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
@@ -262,6 +268,7 @@ void addGeodesicCommand(CLI::App& app) {
       ->default_val("average")
       ->check(CLI::IsMember({"average", "neumann"}));
   addWeldToleranceOption(cmd, args->weldTolerance);
+  addWrapOption(cmd, args->wrap);
   addSolverOptions(cmd, args->solver, GeodesicOptions().solver);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runGeodesic(*args); }); });

@@ -8,6 +8,7 @@
 #include "texgrad/apps/lic.h"
 #include "texgrad/apps/vector_field.h"
 #include "texgrad/core/error.h"
+#include "texgrad/io/uv_tiles.h"
 
 namespace texgrad::cli {
 namespace {
@@ -20,6 +21,7 @@ struct LicArgs {
   SolverArgs solver;
   ReportArgs report;
   double weldTolerance = 0.0;
+  std::string wrap = "auto";
 };
 
 FaceVectorField loadField(const LicArgs& args, const TexturedMesh& mesh) {
@@ -44,7 +46,11 @@ void runLic(LicArgs args) {
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
   TexturedMesh mesh = loadMesh(args.mesh, args.weldTolerance);
-  const FaceVectorField field = loadField(args, mesh);
+  // The field follows faces cut at tile borders as 3-D vectors (a piece has other edges).
+  FaceVectorField field = extrinsicField(mesh, loadField(args, mesh));
+  std::vector<int32_t> parentFace;
+  mesh = wrapMesh(std::move(mesh), args.wrap, "baseColor", &parentFace);
+  field.vectors = followParentFaces(field.vectors, parentFace);
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
   TexelDomain domain(std::move(mesh), width, height, {}, progress);
@@ -149,6 +155,7 @@ void addLicCommand(CLI::App& app) {
                 "Colour noise (random hues) instead of grey noise");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("8"));
   addWeldToleranceOption(cmd, args->weldTolerance);
+  addWrapOption(cmd, args->wrap);
   // Plain V-cycles stall on the anisotropic metric (paper Sec. 8): default to multigrid-CG.
   addSolverOptions(cmd, args->solver, defaultLicSolver());
   addReportOptions(cmd, args->report);

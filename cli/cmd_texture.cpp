@@ -20,6 +20,7 @@ struct TextureArgs {
   SolverArgs solver;
   ReportArgs report;
   double weldTolerance = 0.0;
+  std::string wrap = "auto";
 };
 
 void runTexture(TextureArgs args) {
@@ -32,8 +33,9 @@ void runTexture(TextureArgs args) {
   const bool best = args.select == "best";
   const std::vector<Camera> cameras = readPhotoCameras(args.photos);
   const ProgressCallback progress = progressDisplay(args.report);
-  TexturedMesh mesh =
-      runStage(progress, "read", [&] { return loadMesh(args.mesh, args.weldTolerance); });
+  TexturedMesh mesh = runStage(progress, "read", [&] {
+    return wrapMesh(loadMesh(args.mesh, args.weldTolerance), args.wrap, "baseColor");
+  });
   timer.lap("read");
   TexelDomain domain(std::move(mesh), width, height, {}, progress);
   timer.lap("operators");
@@ -133,6 +135,7 @@ void addTextureCommand(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the photos'"));
   addWeldToleranceOption(cmd, args->weldTolerance);
+  addWrapOption(cmd, args->wrap);
   SolverSettings solverDefaults;
   solverDefaults.cycles = 10;
   solverDefaults.maxIterations = 200;

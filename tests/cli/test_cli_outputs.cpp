@@ -128,13 +128,27 @@ TEST_P(EveryWritingCommand, RefusesUvsOutsideTheImageNamingTheirRange) {
       {"right.obj", "UVs span u [1, 2] x v [0, 1], outside the image [0, 1]^2"},
       {"up.obj", "UVs span u [0, 1] x v [1, 2], outside the image [0, 1]^2"}};
   for (const auto& [mesh, range] : outside) {
-    const auto args = commandLine(GetParam(), mesh, out());
+    auto args = commandLine(GetParam(), mesh, out());
+    args.insert(args.end(), {"--wrap", "clamp"});  // the default (OBJ: repeat) wraps them
     const CliResult r = runCli(args, dir_);
     EXPECT_NE(r.status, 0) << joined(args);
     EXPECT_EQ(lineCount(r.err), 1) << joined(args) << "\n" << r.err;
     EXPECT_NE(r.err.find(range), std::string::npos) << joined(args) << "\n" << r.err;
     EXPECT_NE(r.err.find("move the UVs into [0, 1]^2"), std::string::npos) << r.err;
     EXPECT_FALSE(std::filesystem::exists(dir_ / out())) << joined(args);
+  }
+}
+
+TEST_P(EveryWritingCommand, WrapsUvsInAnotherTileLikeTheirCopyInTheImage) {
+  // An OBJ names no sampler: its texture repeats, so the square moved by a whole tile writes
+  // the same texels as the square inside the image.
+  ASSERT_EQ(runCli(commandLine(GetParam(), "inside.obj", out("inside")), dir_).status, 0);
+  const Image inside = readImage(dir_ / out("inside"));
+  for (const char* mesh : {"right.obj", "up.obj"}) {
+    const auto args = commandLine(GetParam(), mesh, out());
+    const CliResult r = runCli(args, dir_);
+    ASSERT_EQ(r.status, 0) << joined(args) << "\n" << r.err;
+    EXPECT_EQ(readImage(dir_ / out()).pixels, inside.pixels) << joined(args);
   }
 }
 
