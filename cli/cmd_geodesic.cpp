@@ -13,7 +13,6 @@
 #include "texgrad/apps/texel_signal.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/image_io.h"
-#include "texgrad/io/uv_tiles.h"
 
 namespace texgrad::cli {
 namespace {
@@ -128,7 +127,7 @@ void runGeodesic(GeodesicArgs args) {
   args.options.offset = parseGeodesicOffset(args.offset);
   args.options.boundary = parseGeodesicBoundary(args.boundary);
   args.options.validate();
-  std::vector<GeodesicSource> sources = parseSources(args);
+  const std::vector<GeodesicSource> sources = parseSources(args);
   checkImageOutputArgs(args.out, "");
   if (!args.png.empty()) checkImageOutputArgs(args.png, "");
   const ProgressCallback progress = progressDisplay(args.report);
@@ -141,10 +140,7 @@ void runGeodesic(GeodesicArgs args) {
                               args.mesh + " has " + std::to_string(mesh.positions.size()) +
                               " vertices (0-based)");
   const auto [width, height] = chooseResolution(args, mesh);
-  const UvWrap wrap = parseUvWrap(args.wrap, mesh, "baseColor");
-  for (GeodesicSource& s : sources)  // a UV source moves with the faces around it
-    if (s.kind == GeodesicSource::Kind::Uv) s.uv = wrapUvPoint(s.uv, wrap);
-  mesh = wrapTextureCoordinates(std::move(mesh), wrap).mesh;
+  mesh = wrapMesh(std::move(mesh), args.wrap, "baseColor");  // vertex indices are kept
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
   const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
@@ -238,8 +234,9 @@ void addGeodesicCommand(CLI::App& app) {
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option(
          "--source-uv", args->sourceUvs,
-         "Source at texture coordinates U,V (snapped to the nearest chart; refused if more "
-         "than 2 texels outside every chart); repeatable")
+         "Source at texture coordinates U,V of the image (after --wrap has moved the charts "
+         "into it; snapped to the nearest chart; refused if more than 2 texels outside every "
+         "chart); repeatable")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--source-point", args->sourcePoints,

@@ -25,11 +25,11 @@ using Vec3 = Eigen::Vector3d;
 /// zero-area slivers between them.
 constexpr double kEdgeParameterMerge = 1e-9;
 
-/// Tiles that the faces may span in all before the cut is refused: each tile a face spans
-/// becomes at least one triangle (about 100 bytes with its new points), so this bounds the cut
-/// to a few hundred MiB. A floor repeating its texture 100 x 100 times over two triangles spans
-/// 2 x 10^4 tiles.
-constexpr int64_t kMaxSpannedTiles = int64_t{1} << 22;
+/// Tiles that faces crossing a tile border may reach into beyond their first before the cut is
+/// refused: each becomes at least one more triangle (about 100 bytes with its new points), so
+/// this bounds the cut to a few hundred MiB. A floor repeating its texture 100 x 100 times over
+/// two triangles reaches into 2 x 10^4 tiles.
+constexpr int64_t kMaxExtraTiles = int64_t{1} << 22;
 
 /// -1, 0 or +1: x below `line`, on it (within kTileBorderTolerance) or above it.
 int side(double x, int32_t line) {
@@ -159,32 +159,32 @@ class Cutter {
 
 bool Cutter::findSpans() {
   spans_.resize(faceCount_);
-  int64_t spanned = 0;
+  int64_t extraTiles = 0;
   bool any = false;
   for (size_t f = 0; f < faceCount_; ++f) {
     for (int axis = 0; axis < 2; ++axis) {
       const std::array<double, 3> x = cornerCoordinates(f, axis);
       for (int c = 0; c < 3; ++c)
-        if (!(std::abs(x[c]) <= kMaxTileCoordinate))
-          throw InvalidInputError(
-              "face " + std::to_string(f) + " has texture coordinates " +
-              uvText(mesh_.uvs[mesh_.uvTriangles[f][c]]) +
-              " beyond +-1e6 tiles; wrapping "
-              "needs UVs within that range (move the charts nearer the image, or sample the "
-              "texture with ClampToEdge)");
+        if (along_[axis] && !(std::abs(x[c]) <= kMaxTileCoordinate))
+          throw InvalidInputError("face " + std::to_string(f) + " has texture coordinates " +
+                                  uvText(mesh_.uvs[mesh_.uvTriangles[f][c]]) +
+                                  " beyond +-1e6 tiles; wrapping needs UVs within that range "
+                                  "(move the charts nearer the image, or sample the texture "
+                                  "with ClampToEdge)");
       spans_[f][axis] = along_[axis] ? faceSpan(x) : TileSpan{};
     }
-    spanned +=
-        int64_t{spans_[f][0].hi - spans_[f][0].lo + 1} * (spans_[f][1].hi - spans_[f][1].lo + 1);
+    const int64_t columns = spans_[f][0].hi - spans_[f][0].lo + 1;
+    const int64_t rows = spans_[f][1].hi - spans_[f][1].lo + 1;
+    extraTiles += columns * rows - 1;
     any = any || crosses(f);
   }
-  if (spanned > kMaxSpannedTiles)
-    throw InvalidInputError("the faces span " + std::to_string(spanned) +
-                            " unit UV tiles in all; cutting them at every tile border is limited "
-                            "to " +
-                            std::to_string(kMaxSpannedTiles) +
-                            " (sample the texture "
-                            "with ClampToEdge, or repeat it fewer times)");
+  if (extraTiles > kMaxExtraTiles)
+    throw InvalidInputError("faces crossing unit UV tile borders reach into " +
+                            std::to_string(extraTiles) +
+                            " more tiles; cutting them there is "
+                            "limited to " +
+                            std::to_string(kMaxExtraTiles) +
+                            " (sample the texture with ClampToEdge, or repeat it fewer times)");
   return any;
 }
 

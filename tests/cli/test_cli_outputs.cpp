@@ -152,6 +152,21 @@ TEST_P(EveryWritingCommand, WrapsUvsInAnotherTileLikeTheirCopyInTheImage) {
   }
 }
 
+TEST(Cli, GeodesicUvSourceIsInTheImageTheChartsWereMovedInto) {
+  // --source-uv names a point of the image: on the square moved to v in [1, 2] (and wrapped
+  // back into the image) the same UV is the same surface point, so the distances are the same.
+  const std::filesystem::path dir = tempDir("outputs_geodesic_uv_tile");
+  writeInputs(dir);
+  const auto run = [&](const char* mesh, const char* uv, const char* out) {
+    const CliResult r =
+        runCli({"geodesic", mesh, "-r", "32", "--source-uv", uv, "-o", out, "--quiet"}, dir);
+    EXPECT_EQ(r.status, 0) << r.err;
+    return readImage(dir / out);
+  };
+  EXPECT_EQ(run("up.obj", "0.3,0.6", "up.exr").pixels,
+            run("inside.obj", "0.3,0.6", "inside.exr").pixels);
+}
+
 TEST_P(EveryWritingCommand, RefusesABadOutputBeforeReadingAnyInput) {
   // The mesh does not exist: a refusal that names the output, not the mesh, was made before
   // anything was read (let alone computed).
@@ -335,7 +350,9 @@ const char* kTwoIslandsObj =
 TEST(Cli, GeodesicRefusesASourceThatReachesNoTexelOfTheImage) {
   const auto dir = tempDir("outputs_geodesic_island");
   writeText(dir / "islands.obj", kTwoIslandsObj);
-  const std::vector<std::string> base{"geodesic", "islands.obj", "-r", "32", "-o", "d.exr"};
+  // With --wrap clamp: a texture that repeats would read the outer island inside the image.
+  const std::vector<std::string> base{"geodesic", "islands.obj", "-r",     "32",
+                                      "-o",       "d.exr",       "--wrap", "clamp"};
   auto inside = base, outside = base;
   inside.insert(inside.end(), {"--source-vertex", "0"});
   outside.insert(outside.end(), {"--source-vertex", "4"});

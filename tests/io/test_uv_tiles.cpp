@@ -239,6 +239,18 @@ TEST(UvTiles, HugeCoordinatesAreRefusedInOneLine) {
   }
 }
 
+TEST(UvTiles, AFaceOverMillionsOfTilesIsRefusedBeforeCutting) {
+  // A square repeating its texture 3000 x 3000 times: 9 million pieces are not made.
+  try {
+    cutAtTileBorders(procedural::square(3000.0, 3000.0));
+    FAIL() << "no error";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("more tiles"), std::string::npos) << e.what();
+  }
+  // Along an axis that is not cut (ClampToEdge), nothing is counted or refused.
+  EXPECT_FALSE(cutAtTileBorders(procedural::square(1.0, 3e6, 0.0, 0.0), true, false).cut);
+}
+
 TEST(UvTiles, ParentFacesCarryPerFaceValues) {
   const TileCut cut = cutAtTileBorders(procedural::square(0.5, 1.0, 0.75, 0.0));
   const std::vector<int> values{10, 20};
