@@ -3,6 +3,8 @@
 // sampler reads them.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <map>
 #include <set>
 
