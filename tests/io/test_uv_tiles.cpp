@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <map>
 #include <set>
 
@@ -123,9 +124,18 @@ TEST(UvTiles, ALineWithinTheToleranceOfACornerCutsThroughIt) {
 TEST(UvTiles, AStraddlingSquareIsCutWatertightIntoTwoTiles) {
   TexturedMesh square = procedural::square(0.5, 1.0, 0.75, 0.0);  // u in [0.75, 1.25]
   square.faceMaterial = {3, 7};
+  TextureRef everyFace, material7;
+  everyFace.faces = 2;
+  material7.faces = 1;
+  material7.materials = {7};
+  square.textures = {everyFace, material7};
   const TileCut cut = cutAtTileBorders(square);
   EXPECT_TRUE(cut.cut);
   expectValidCut(square, cut);
+  const auto faces7 = std::count(cut.mesh.faceMaterial.begin(), cut.mesh.faceMaterial.end(), 7);
+  EXPECT_EQ(cut.mesh.textures[0].faces, cut.mesh.faceCount());  // the faces each texture covers
+  EXPECT_EQ(cut.mesh.textures[1].faces, static_cast<size_t>(faces7));
+  EXPECT_GT(faces7, 1);
   double tileArea[2] = {0.0, 0.0};
   for (size_t f = 0; f < cut.mesh.faceCount(); ++f) {
     ASSERT_TRUE(cut.faceTile[f].k == 0 || cut.faceTile[f].k == 1);
