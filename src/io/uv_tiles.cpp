@@ -22,8 +22,10 @@ using Vec3 = Eigen::Vector3d;
 /// Cut points on one edge whose parameters differ by less than this (a fraction of the edge) are
 /// one point. Two faces across a seam can be cut at the same 3-D point by lines on both sides;
 /// their parameters then differ only by rounding, and two points that close would leave
-/// zero-area slivers between them.
-constexpr double kEdgeParameterMerge = 1e-9;
+/// zero-area slivers between them. Small enough that the kept point lies within
+/// kTileBorderTolerance of the other face's line on any edge shorter than 10^5 tiles, so each
+/// face still sees its own cut on its line.
+constexpr double kEdgeParameterMerge = 1e-12;
 
 /// Tiles that faces crossing a tile border may reach into beyond their first before the cut is
 /// refused: each becomes at least one more triangle (about 100 bytes with its new points), so
@@ -80,14 +82,14 @@ uint64_t edgeKey(int32_t a, int32_t b) {
 
 /// A corner of a face's piece: where it lies in the face, in UV and in 3-D, and which UV it
 /// takes: an original UV index, or a new UV per (position, owner, tile).
-struct PieceVertex {
+struct CutVertex {
   Vec3 bary = Vec3::Zero();  ///< barycentric coordinates in the parent face
   Vec2 uv = Vec2::Zero();
   int32_t position = -1;
   int32_t uvIndex = -1;  ///< >= 0: an original UV index (a face corner)
   uint64_t owner = 0;    ///< new points: the UV edge they lie on, or kInteriorOwner
 };
-using Polygon = std::vector<PieceVertex>;
+using Polygon = std::vector<CutVertex>;
 constexpr uint64_t kInteriorOwner = ~uint64_t{0};
 
 /// Key of a new UV: one per point, UV edge (or face interior) and tile.
@@ -133,8 +135,7 @@ class Cutter {
   void collectEdgeCuts();
   void makeEdgePoints();
   Polygon facePolygon(size_t face) const;
-  PieceVertex crossing(size_t face, const PieceVertex& a, const PieceVertex& b, int axis,
-                       int32_t line);
+  CutVertex crossing(size_t face, const CutVertex& a, const CutVertex& b, int axis, int32_t line);
   void splitPolygon(size_t face, const Polygon& polygon, int axis, int32_t line, Polygon& below,
                     Polygon& above);
   std::vector<std::pair<Polygon, UvTile>> pieces(size_t face);
@@ -153,7 +154,7 @@ class Cutter {
   std::unordered_map<uint64_t, std::vector<double>> edgeCuts_;
   std::unordered_map<uint64_t, std::vector<std::pair<double, int32_t>>> edgePoints_;
   /// Points made inside a face, by (face, chord ends, axis, line).
-  std::map<std::tuple<size_t, int32_t, int32_t, int, int32_t>, PieceVertex> interiorPoints_;
+  std::map<std::tuple<size_t, int32_t, int32_t, int, int32_t>, CutVertex> interiorPoints_;
   std::unordered_map<NewUvKey, int32_t, NewUvKeyHash> newUvs_;
 };
 
@@ -231,7 +232,7 @@ Polygon Cutter::facePolygon(size_t face) const {
   const Triangle& t = mesh_.uvTriangles[face];
   Polygon polygon;
   for (int e = 0; e < 3; ++e) {
-    PieceVertex corner;
+    CutVertex corner;
     corner.bary[e] = 1.0;
     corner.uv = mesh_.uvs[t[e]];
     corner.position = p[e];
@@ -246,7 +247,7 @@ Polygon Cutter::facePolygon(size_t face) const {
     const size_t n = found->second.size();
     for (size_t i = 0; i < n; ++i) {
       const auto& [param, position] = found->second[forward ? i : n - 1 - i];
-      PieceVertex point;
+      CutVertex point;
       point.bary[a] = 1.0 - param;
       point.bary[b] = param;
       point.uv = (1.0 - param) * ua + param * ub;
@@ -259,16 +260,16 @@ Polygon Cutter::facePolygon(size_t face) const {
   return polygon;
 }
 
-PieceVertex Cutter::crossing(size_t face, const PieceVertex& a, const PieceVertex& b, int axis,
-                             int32_t line) {
+CutVertex Cutter::crossing(size_t face, const CutVertex& a, const CutVertex& b, int axis,
+                           int32_t line) {
   // The same chord is met from both of its sides: compute it once, from its lower position.
-  const PieceVertex& lo = a.position < b.position ? a : b;
-  const PieceVertex& hi = a.position < b.position ? b : a;
+  const CutVertex& lo = a.position < b.position ? a : b;
+  const CutVertex& hi = a.position < b.position ? b : a;
   const auto key = std::make_tuple(face, lo.position, hi.position, axis, line);
   const auto found = interiorPoints_.find(key);
   if (found != interiorPoints_.end()) return found->second;
   const double s = (line - lo.uv[axis]) / (hi.uv[axis] - lo.uv[axis]);
-  PieceVertex point;
+  CutVertex point;
   point.bary = (1.0 - s) * lo.bary + s * hi.bary;
   point.uv = (1.0 - s) * lo.uv + s * hi.uv;
   point.uv[axis] = line;
@@ -292,15 +293,15 @@ void Cutter::splitPolygon(size_t face, const Polygon& polygon, int axis, int32_t
   above.clear();
   bool strictlyBelow = false, strictlyAbove = false;
   for (size_t i = 0; i < polygon.size(); ++i) {
-    const PieceVertex& a = polygon[i];
-    const PieceVertex& b = polygon[(i + 1) % polygon.size()];
+    const CutVertex& a = polygon[i];
+    const CutVertex& b = polygon[(i + 1) % polygon.size()];
     const int sa = side(a.uv[axis], line), sb = side(b.uv[axis], line);
     if (sa <= 0) below.push_back(a);
     if (sa >= 0) above.push_back(a);
     strictlyBelow = strictlyBelow || sa < 0;
     strictlyAbove = strictlyAbove || sa > 0;
     if (sa * sb < 0) {
-      const PieceVertex x = crossing(face, a, b, axis, line);
+      const CutVertex x = crossing(face, a, b, axis, line);
       below.push_back(x);
       above.push_back(x);
     }
@@ -337,7 +338,7 @@ std::vector<std::pair<Polygon, UvTile>> Cutter::pieces(size_t face) {
 
 /// Twice the signed area of a triangle of piece corners, in the face's barycentric plane (where
 /// every piece has the face's orientation, even on a face with no UV or 3-D area).
-double baryArea(const PieceVertex& a, const PieceVertex& b, const PieceVertex& c) {
+double baryArea(const CutVertex& a, const CutVertex& b, const CutVertex& c) {
   const Eigen::Vector2d ab(b.bary[1] - a.bary[1], b.bary[2] - a.bary[2]);
   const Eigen::Vector2d ac(c.bary[1] - a.bary[1], c.bary[2] - a.bary[2]);
   return ab.x() * ac.y() - ab.y() * ac.x();
@@ -382,7 +383,7 @@ void Cutter::emit(size_t face, const Polygon& piece, UvTile tile, bool first, Ti
   for (const auto& corners : triangulate(piece)) {
     Triangle positions{}, uvs{};
     for (int c = 0; c < 3; ++c) {
-      const PieceVertex& v = piece[corners[c]];
+      const CutVertex& v = piece[corners[c]];
       positions[c] = v.position;
       if (v.uvIndex >= 0) {
         uvs[c] = v.uvIndex;

@@ -198,6 +198,19 @@ TEST(UvTiles, ASeamEdgeCutOnOneSideIsSplitOnTheOtherToo) {
   EXPECT_EQ(tiles, (std::set<std::pair<int, int>>{{0, 0}, {0, 1}}));
 }
 
+TEST(UvTiles, BothSidesOfASeamCutAtOnePointShareIt) {
+  // Both charts moved alike: v = 1 crosses the seam edge at the same point on both sides, which
+  // is one new 3-D point (not two coincident ones with a zero-area sliver between them). The
+  // line crosses 5 vertical edges (the seam once) and 4 diagonals of the 4 x 4 cells.
+  TexturedMesh m = procedural::twoChartSquare(4);
+  for (Eigen::Vector2d& uv : m.uvs) uv.y() += 0.5 + 1.0 / 7.0;
+  const TileCut cut = cutAtTileBorders(m);
+  expectValidCut(m, cut);
+  EXPECT_EQ(cut.mesh.positions.size(), m.positions.size() + 9);
+  for (size_t p = m.positions.size(); p < cut.mesh.positions.size(); ++p)
+    EXPECT_EQ(tilesUsing(cut, static_cast<int32_t>(p)).size(), 2u) << p;
+}
+
 TEST(UvTiles, RepeatShiftsMirrorFlipsClampKeeps) {
   const TexturedMesh square = procedural::square(1.0, 1.0, 1.0, -3.0);  // tile (1, -3)
   for (const auto& [u, v, expectU, expectV] :
