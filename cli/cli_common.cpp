@@ -25,6 +25,7 @@
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/mesh_texture.h"
 #include "texgrad/io/procedural.h"
+#include "texgrad/io/uv_tiles.h"
 
 namespace texgrad::cli {
 namespace {
@@ -253,6 +254,25 @@ void addMeshReadOptions(CLI::App* cmd, MeshReadOptions& options) {
                   "and builtin meshes have only 0")
       ->default_val(0)
       ->check(CLI::NonNegativeNumber);
+}
+
+void addWrapOption(CLI::App* cmd, std::string& wrap) {
+  cmd->add_option("--wrap", wrap,
+                  "How the texture is sampled outside [0, 1]^2: repeat (charts in other unit UV "
+                  "tiles are moved into the image, faces straddling a tile border are cut there "
+                  "and joined by a seam), mirror (every other tile mirrored), clamp (UVs used as "
+                  "they are; an atlas wholly outside the image is refused), or auto (the mesh's "
+                  "sampler: glTF's wrapS/wrapT, OBJ -clamp; repeat when it names none)")
+      ->default_val("auto")
+      ->check(CLI::IsMember({"auto", "repeat", "mirror", "clamp"}));
+}
+
+TexturedMesh wrapMesh(TexturedMesh mesh, const std::string& wrap, const std::string& slot,
+                      std::vector<int32_t>* parentFace) {
+  const UvWrap mode = parseUvWrap(wrap, mesh, slot);
+  WrappedMesh wrapped = wrapTextureCoordinates(std::move(mesh), mode);
+  if (parentFace) *parentFace = std::move(wrapped.parentFace);
+  return std::move(wrapped.mesh);
 }
 
 void addRawSolutionFlag(CLI::App* cmd, bool& raw) {

@@ -59,6 +59,15 @@ void printJson(const nlohmann::json& document);
 /// coincident positions only) and --uv-set (glTF TEXCOORD_N).
 void addMeshReadOptions(CLI::App* cmd, MeshReadOptions& options);
 
+/// Registers --wrap (auto, repeat, mirror, clamp: how the texture is sampled outside [0, 1]^2).
+void addWrapOption(CLI::App* cmd, std::string& wrap);
+
+/// The mesh as the texture in `slot` reads it under --wrap `wrap` (parseUvWrap,
+/// wrapTextureCoordinates): charts in other UV tiles moved into the image, faces straddling a
+/// tile border cut. `parentFace`, if given, receives each face's face in `mesh`.
+TexturedMesh wrapMesh(TexturedMesh mesh, const std::string& wrap, const std::string& slot,
+                      std::vector<int32_t>* parentFace = nullptr);
+
 /// Registers --raw (keep the solver's values at barely covered texels; the library's
 /// rawSolution option).
 void addRawSolutionFlag(CLI::App* cmd, bool& raw);

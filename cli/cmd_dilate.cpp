@@ -16,6 +16,7 @@ struct DilateArgs {
   DilateOptions options;
   ReportArgs report;
   MeshReadOptions read;
+  std::string wrap = "auto";
 };
 
 /// Image texels whose value the padding changed (all in the gutter: active texels are kept).
@@ -35,7 +36,7 @@ void runDilate(const DilateArgs& args) {
   args.options.validate();
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   StageTimer timer;
-  const TexturedMesh mesh = loadMesh(args.mesh, args.read);
+  const TexturedMesh mesh = wrapMesh(loadMesh(args.mesh, args.read), args.wrap, args.slot);
   requireUvsInImage(mesh);
   const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
   timer.lap("read");
@@ -82,6 +83,7 @@ void addDilateCommand(CLI::App& app) {
       ->default_val("baseColor");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input texture's"));
   addMeshReadOptions(cmd, args->read);
+  addWrapOption(cmd, args->wrap);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runDilate(*args); }); });
 }

@@ -20,6 +20,7 @@ struct FilterArgs {
   SolverArgs solver;
   ReportArgs report;
   MeshReadOptions read;
+  std::string wrap = "auto";
 };
 
 void runFilter(FilterArgs args) {
@@ -29,7 +30,7 @@ void runFilter(FilterArgs args) {
   if (args.options.normalMap && args.slot == "baseColor") args.slot = "normal";
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  TexturedMesh mesh = loadMesh(args.mesh, args.read);
+  TexturedMesh mesh = wrapMesh(loadMesh(args.mesh, args.read), args.wrap, args.slot);
   Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
   const int width = texture.width, height = texture.height;
   reportProgress(progress, "read", 1.0);
@@ -133,6 +134,7 @@ void addFilterCommand(CLI::App& app) {
       ->default_val("baseColor");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input texture's"));
   addMeshReadOptions(cmd, args->read);
+  addWrapOption(cmd, args->wrap);
   addRawSolutionFlag(cmd, args->options.rawSolution);
   addSolverOptions(cmd, args->solver, FilterOptions().solver);
   addReportOptions(cmd, args->report);

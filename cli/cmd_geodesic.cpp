@@ -32,6 +32,7 @@ struct GeodesicArgs {
   SolverArgs solver;
   ReportArgs report;
   MeshReadOptions read;
+  std::string wrap = "auto";
 };
 
 /// Parses `count` comma-separated numbers ("0.5,0.25"); throws InvalidInputError naming `flag`.
@@ -139,6 +140,7 @@ void runGeodesic(GeodesicArgs args) {
                               args.mesh + " has " + std::to_string(mesh.positions.size()) +
                               " vertices (0-based)");
   const auto [width, height] = chooseResolution(args, mesh);
+  mesh = wrapMesh(std::move(mesh), args.wrap, "baseColor");  // vertex indices are kept
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
   const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
@@ -232,8 +234,9 @@ void addGeodesicCommand(CLI::App& app) {
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option(
          "--source-uv", args->sourceUvs,
-         "Source at texture coordinates U,V (snapped to the nearest chart; refused if more "
-         "than 2 texels outside every chart); repeatable")
+         "Source at texture coordinates U,V of the image (after --wrap has moved the charts "
+         "into it; snapped to the nearest chart; refused if more than 2 texels outside every "
+         "chart); repeatable")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   cmd->add_option("--source-point", args->sourcePoints,
@@ -262,6 +265,7 @@ void addGeodesicCommand(CLI::App& app) {
       ->default_val("average")
       ->check(CLI::IsMember({"average", "neumann"}));
   addMeshReadOptions(cmd, args->read);
+  addWrapOption(cmd, args->wrap);
   addSolverOptions(cmd, args->solver, GeodesicOptions().solver);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runGeodesic(*args); }); });

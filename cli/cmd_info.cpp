@@ -21,6 +21,7 @@ struct InfoArgs {
   std::string texture;
   bool json = false;
   MeshReadOptions read;
+  std::string wrap = "auto";
   int maxIds = 20;
 };
 
@@ -92,7 +93,8 @@ void printText(const std::string& name, const AtlasReport& r, const TexturedMesh
 }
 
 void runInfo(const InfoArgs& args) {
-  const TexturedMesh mesh = loadMesh(args.mesh, args.read);
+  const TexturedMesh mesh =
+      wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
   const Atlas atlas = buildAtlas(mesh);
   std::optional<TexelGrid> grid;
   std::string resolution = args.resolution;
@@ -131,6 +133,7 @@ void addInfoCommand(CLI::App& app) {
                   "Texture whose size sets the resolution when --resolution is not given");
   cmd->add_flag("--json", args->json, "Print the report as JSON on stdout (default: text)");
   addMeshReadOptions(cmd, args->read);
+  addWrapOption(cmd, args->wrap);
   cmd->add_option("--max-ids", args->maxIds, "How many element ids to list per problem (text)")
       ->default_val(20)
       ->check(CLI::NonNegativeNumber);

@@ -8,6 +8,7 @@
 #include "texgrad/apps/lic.h"
 #include "texgrad/apps/vector_field.h"
 #include "texgrad/core/error.h"
+#include "texgrad/io/uv_tiles.h"
 
 namespace texgrad::cli {
 namespace {
@@ -20,18 +21,28 @@ struct LicArgs {
   SolverArgs solver;
   ReportArgs report;
   MeshReadOptions read;
+  std::string wrap = "auto";
 };
 
-FaceVectorField loadField(const LicArgs& args, const TexturedMesh& mesh) {
-  if (!args.field.empty())
-    return readFaceVectorField(args.field,
-                               args.intrinsic ? FieldBasis::Intrinsic : FieldBasis::Extrinsic,
-                               mesh.faceCount());
-  CurvatureOptions curvature;
-  curvature.smoothingRounds = args.smoothing;
-  return curvatureField(
-      mesh, args.curvature == "min" ? CurvatureDirection::Minor : CurvatureDirection::Major,
-      curvature);
+/// The --field file's vectors on the faces of the wrapped mesh (3-D vectors: a piece of a face
+/// cut at a tile border has other edges), or the curvature field of the wrapped mesh (as the
+/// Python module computes it on the mesh it is given).
+FaceVectorField loadField(const LicArgs& args, TexturedMesh& mesh) {
+  if (args.field.empty()) {
+    mesh = wrapMesh(std::move(mesh), args.wrap, "baseColor");
+    CurvatureOptions curvature;
+    curvature.smoothingRounds = args.smoothing;
+    return curvatureField(
+        mesh, args.curvature == "min" ? CurvatureDirection::Minor : CurvatureDirection::Major,
+        curvature);
+  }
+  const FieldBasis basis = args.intrinsic ? FieldBasis::Intrinsic : FieldBasis::Extrinsic;
+  FaceVectorField field =
+      extrinsicField(mesh, readFaceVectorField(args.field, basis, mesh.faceCount()));
+  std::vector<int32_t> parentFace;
+  mesh = wrapMesh(std::move(mesh), args.wrap, "baseColor", &parentFace);
+  field.vectors = followParentFaces(field.vectors, parentFace);
+  return field;
 }
 
 void runLic(LicArgs args) {
@@ -44,7 +55,7 @@ void runLic(LicArgs args) {
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
   TexturedMesh mesh = loadMesh(args.mesh, args.read);
-  const FaceVectorField field = loadField(args, mesh);
+  const FaceVectorField field = loadField(args, mesh);  // wraps the mesh
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
   TexelDomain domain(std::move(mesh), width, height, {}, progress);
@@ -149,6 +160,7 @@ void addLicCommand(CLI::App& app) {
                 "Colour noise (random hues) instead of grey noise");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("8"));
   addMeshReadOptions(cmd, args->read);
+  addWrapOption(cmd, args->wrap);
   // Plain V-cycles stall on the anisotropic metric (paper Sec. 8): default to multigrid-CG.
   addSolverOptions(cmd, args->solver, defaultLicSolver());
   addReportOptions(cmd, args->report);

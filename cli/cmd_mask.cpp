@@ -17,6 +17,7 @@ struct MaskArgs {
   std::string kind = "active";
   std::string bitDepth;
   MeshReadOptions read;
+  std::string wrap = "auto";
   bool quiet = false;
 };
 
@@ -25,7 +26,8 @@ void runMask(const MaskArgs& args) {
   const auto [w, h] = parseResolution(args.resolution);
   checkImageOutputArgs(args.out, args.bitDepth);
   StageTimer timer;
-  const TexturedMesh mesh = loadMesh(args.mesh, args.read);
+  const TexturedMesh mesh =
+      wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
   requireUvsInImage(mesh);
   const Atlas atlas = buildAtlas(mesh);
   const TexelGrid grid = buildTexelGrid(mesh, atlas, w, h);
@@ -57,6 +59,7 @@ void addMaskCommand(CLI::App& app) {
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("8"));
   cmd->add_flag("--quiet,-q", args->quiet, "No summary line");
   addMeshReadOptions(cmd, args->read);
+  addWrapOption(cmd, args->wrap);
   cmd->callback([args] { exitStatus = runGuarded([&] { runMask(*args); }); });
 }
 

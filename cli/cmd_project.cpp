@@ -17,6 +17,7 @@ struct ProjectArgs {
   PhotoArgs photos;
   ReportArgs report;
   MeshReadOptions read;
+  std::string wrap = "auto";
 };
 
 /// `dir`/`stem`-NN.png for view number `index`.
@@ -36,7 +37,9 @@ void runProject(const ProjectArgs& args) {
   if (ec) throw IoError("cannot create the output folder '" + args.outDir + "': " + ec.message());
   checkImageOutputArgs(numbered(args.outDir, "partial", 0).string(), "");
   const ProgressCallback progress = progressDisplay(args.report);
-  TexturedMesh mesh = runStage(progress, "read", [&] { return loadMesh(args.mesh, args.read); });
+  TexturedMesh mesh = runStage(progress, "read", [&] {
+    return wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
+  });
   timer.lap("read");
   // Projection reads the basis and S only (surface points, normals): no re-assembly.
   TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(), progress);
@@ -96,6 +99,7 @@ void addProjectCommand(CLI::App& app) {
   cmd->add_option("--out-dir", args->outDir, "Folder for partial-NN.png and confidence-NN.png")
       ->required();
   addMeshReadOptions(cmd, args->read);
+  addWrapOption(cmd, args->wrap);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runProject(*args); }); });
 }

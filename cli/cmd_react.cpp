@@ -18,6 +18,7 @@ struct ReactArgs {
   SolverArgs solver;
   ReportArgs report;
   MeshReadOptions read;
+  std::string wrap = "auto";
 };
 
 /// Largest --steps accepted.
@@ -50,7 +51,7 @@ void runReact(ReactArgs args) {
   const auto [width, height] = parseResolution(args.resolution);
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  TexturedMesh mesh = loadMesh(args.mesh, args.read);
+  TexturedMesh mesh = wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
   const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
@@ -130,6 +131,7 @@ void addReactCommand(CLI::App& app) {
       ->check(resolutionValidator());
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("8"));
   addMeshReadOptions(cmd, args->read);
+  addWrapOption(cmd, args->wrap);
   addSolverOptions(cmd, args->solver, defaultReactionSolver());
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runReact(*args); }); });

@@ -15,6 +15,7 @@ struct SeamsArgs {
   SeamsOptions options;
   ReportArgs report;
   MeshReadOptions read;
+  std::string wrap = "auto";
 };
 
 void runSeams(const SeamsArgs& args) {
@@ -22,7 +23,7 @@ void runSeams(const SeamsArgs& args) {
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  TexturedMesh mesh = loadMesh(args.mesh, args.read);
+  TexturedMesh mesh = wrapMesh(loadMesh(args.mesh, args.read), args.wrap, args.slot);
   const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
   const Image mask = args.mask.empty() ? Image() : readImage(args.mask);
   reportProgress(progress, "read", 1.0);
@@ -82,6 +83,7 @@ void addSeamsCommand(CLI::App& app) {
       ->default_val("baseColor");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input's"));
   addMeshReadOptions(cmd, args->read);
+  addWrapOption(cmd, args->wrap);
   addRawSolutionFlag(cmd, args->options.rawSolution);
   addReportOptions(cmd, args->report);
   cmd->callback([args] { exitStatus = runGuarded([&] { runSeams(*args); }); });

@@ -18,6 +18,7 @@ struct StitchArgs {
   SolverArgs solver;
   ReportArgs report;
   MeshReadOptions read;
+  std::string wrap = "auto";
 };
 
 /// Expands a printf pattern with one integer (e.g. 'texels-%02d.png') for 0, 1, ... while files
@@ -64,7 +65,7 @@ void runStitch(StitchArgs args) {
         "--confidence");
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  TexturedMesh mesh = loadMesh(args.mesh, args.read);
+  TexturedMesh mesh = wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
   Image composite, segments;
   std::vector<Image> partials, confidences;
   if (compositeMode) {
@@ -144,6 +145,7 @@ void addStitchCommand(CLI::App& app) {
                 "shading");
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the input's"));
   addMeshReadOptions(cmd, args->read);
+  addWrapOption(cmd, args->wrap);
   addRawSolutionFlag(cmd, args->options.rawSolution);
   SolverSettings solverDefaults;
   solverDefaults.cycles = 10;

@@ -20,6 +20,7 @@ struct TextureArgs {
   SolverArgs solver;
   ReportArgs report;
   MeshReadOptions read;
+  std::string wrap = "auto";
 };
 
 void runTexture(TextureArgs args) {
@@ -32,7 +33,9 @@ void runTexture(TextureArgs args) {
   const bool best = args.select == "best";
   const std::vector<Camera> cameras = readPhotoCameras(args.photos);
   const ProgressCallback progress = progressDisplay(args.report);
-  TexturedMesh mesh = runStage(progress, "read", [&] { return loadMesh(args.mesh, args.read); });
+  TexturedMesh mesh = runStage(progress, "read", [&] {
+    return wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
+  });
   timer.lap("read");
   TexelDomain domain(std::move(mesh), width, height, {}, progress);
   timer.lap("operators");
@@ -132,6 +135,7 @@ void addTextureCommand(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--bit-depth", args->bitDepth, bitDepthHelp("the photos'"));
   addMeshReadOptions(cmd, args->read);
+  addWrapOption(cmd, args->wrap);
   SolverSettings solverDefaults;
   solverDefaults.cycles = 10;
   solverDefaults.maxIterations = 200;

@@ -3,6 +3,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,7 @@
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/mesh_texture.h"
+#include "texgrad/io/uv_tiles.h"
 
 namespace texgrad::python {
 namespace {
@@ -206,6 +208,25 @@ void registerMesh(py::module_& m) {
           py::arg("slot") = "baseColor", py::kw_only(), py::arg("dtype") = py::none(),
           "The mesh's texture in `slot` as an H x W x C array (row 0 = top; float32 in [0, 1] by "
           "default, as texgrad reads it), or None if the file names none.")
+      .def(
+          "wrapped",
+          [](const TexturedMesh& mesh, const std::string& wrap, const std::string& slot) {
+            const UvWrap mode = parseUvWrap(wrap, mesh, slot);
+            WrappedMesh wrapped;
+            {
+              py::gil_scoped_release release;
+              wrapped = wrapTextureCoordinates(mesh, mode);
+            }
+            py::array_t<int32_t> parents(static_cast<py::ssize_t>(wrapped.parentFace.size()));
+            std::copy(wrapped.parentFace.begin(), wrapped.parentFace.end(), parents.mutable_data());
+            return py::make_tuple(std::make_shared<TexturedMesh>(std::move(wrapped.mesh)), parents);
+          },
+          py::arg("wrap") = "auto", py::arg("slot") = "baseColor",
+          "(mesh, parents): the mesh as a texture that wraps reads it, as the CLI's --wrap: "
+          "faces crossing an integer UV line cut there (the sides joined by a seam) and every "
+          "unit tile moved into [0, 1]^2; wrap 'auto' (the sampler of the texture in `slot`, "
+          "repeat when none), 'repeat', 'mirror' or 'clamp' (unchanged). parents[f] is the face "
+          "of this mesh that face f is part of: per-face 3-D vectors follow as field[parents].")
       .def("atlas_report", &atlasReport, py::arg("resolution") = py::none(),
            "The atlas diagnostics as the dict `texgrad info --json` prints (texel "
            "statistics too when `resolution` is N or (width, height)).")
@@ -219,17 +240,24 @@ void registerMesh(py::module_& m) {
 
   m.def(
       "read_mesh",
-      [](const std::filesystem::path& path, double weldTolerance, int uvSet) {
+      [](const std::filesystem::path& path, double weldTolerance, int uvSet,
+         const std::string& wrap, const std::string& slot) {
         MeshReadOptions options;
         options.weldTolerance = weldTolerance;
         options.uvSet = uvSet;
         py::gil_scoped_release release;
-        return std::make_shared<TexturedMesh>(readMesh(path, options));
+        TexturedMesh mesh = readMesh(path, options);
+        const UvWrap mode = parseUvWrap(wrap, mesh, slot);
+        return std::make_shared<TexturedMesh>(wrapTextureCoordinates(std::move(mesh), mode).mesh);
       },
       py::arg("path"), py::kw_only(), py::arg("weld_tolerance") = 0.0, py::arg("uv_set") = 0,
+      py::arg("wrap") = "auto", py::arg("slot") = "baseColor",
       "Reads a mesh file the CLI reads (.obj with its .mtl, .ply, .gltf, .glb), welding "
-      "positions closer than weld_tolerance (model units) so seams are found; uv_set picks "
-      "glTF's TEXCOORD_N (OBJ and PLY have only 0).");
+      "positions closer than weld_tolerance (model units) so seams are found (uv_set picks glTF's "
+      "TEXCOORD_N; OBJ and PLY have only 0), and wraps its UVs "
+      "as the CLI's --wrap does for the texture in `slot` (Mesh.wrapped): wrap 'auto' (the "
+      "file's sampler, repeat when it names none), 'repeat', 'mirror' or 'clamp' (the file's "
+      "UVs and faces as they are; per-face data of the file then match the faces).");
 
   m.def(
       "read_image",

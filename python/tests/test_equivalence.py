@@ -149,3 +149,27 @@ def test_mask_and_dilate_on_a_domain_equal_those_on_its_mesh(spot_mesh, spot_dom
                           texgrad.dilate(spot_mesh, image, radius=3))
     assert np.array_equal(texgrad.mask(spot_domain, kind="chart"),
                           texgrad.mask(spot_mesh, SIZE, kind="chart"))
+
+
+def test_wrapped_mesh_filters_like_its_copy_in_the_image(tmp_path, spot_mesh, spot_texture_file):
+    # spot with its UVs moved by one tile in v: read_mesh wraps it (OBJ: repeat) as the CLI does,
+    # so the filter's output is spot's own (to 1e-6: v + 1 - 1 rounds); wrap="clamp" keeps the
+    # file's UVs, which then lie outside the image and are refused.
+    lines = SPOT.read_text().splitlines()
+    moved = [f"vt {float(l.split()[1]):.17g} {float(l.split()[2]) + 1:.17g}"
+             if l.startswith("vt ") else l for l in lines if not l.startswith("mtllib")]
+    up = tmp_path / "spot_up.obj"
+    up.write_text("\n".join(moved) + "\n")
+    image = texgrad.read_image(spot_texture_file, dtype=np.float32)
+    expected = texgrad.filter(spot_mesh, image, beta=0.3)
+    assert np.abs(texgrad.filter(texgrad.read_mesh(up), image, beta=0.3) - expected).max() < 1e-6
+    with pytest.raises(ValueError, match="outside the image"):
+        texgrad.filter(texgrad.read_mesh(up, wrap="clamp"), image, beta=0.3)
+    mesh, parents = texgrad.read_mesh(up, wrap="clamp").wrapped("repeat")
+    assert parents.dtype == np.int32 and parents.shape == (mesh.face_count,)
+    assert parents.min() == 0 and parents.max() == spot_mesh_face_count(up) - 1
+    assert np.abs(texgrad.filter(mesh, image, beta=0.3) - expected).max() < 1e-6
+
+
+def spot_mesh_face_count(path):
+    return sum(1 for line in path.read_text().splitlines() if line.startswith("f "))

@@ -210,6 +210,22 @@ void writeFaceVectorField(const std::filesystem::path& path, const FaceVectorFie
   });
 }
 
+FaceVectorField extrinsicField(const TexturedMesh& mesh, const FaceVectorField& field) {
+  if (field.vectors.size() != mesh.faceCount())
+    throw InvalidInputError("vector field has " + std::to_string(field.vectors.size()) +
+                            " vectors but the mesh has " + std::to_string(mesh.faceCount()) +
+                            " faces");
+  if (field.basis == FieldBasis::Extrinsic) return field;
+  FaceVectorField out{FieldBasis::Extrinsic, std::vector<Eigen::Vector3d>(field.vectors.size())};
+  for (size_t f = 0; f < mesh.faceCount(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    const Eigen::Vector3d& p0 = mesh.positions[t[0]];
+    out.vectors[f] = field.vectors[f].x() * (mesh.positions[t[1]] - p0) +
+                     field.vectors[f].y() * (mesh.positions[t[2]] - p0);
+  }
+  return out;
+}
+
 std::vector<Eigen::Vector2d> fieldInTexelCoordinates(const TexturedMesh& mesh,
                                                      const TexelGrid& grid,
                                                      const FaceVectorField& field) {

@@ -82,9 +82,10 @@ void requireUvsInImage(const TexturedMesh& mesh) {
   throw InvalidInputError(
       where + "UVs span u [" + number(r.min.x()) + ", " + number(r.max.x()) + "] x v [" +
       number(r.min.y()) + ", " + number(r.max.y()) +
-      "], outside the image [0, 1]^2, so no texel would change; wrapped (REPEAT) and tiled (UDIM) "
-      "atlases are not supported yet: move the UVs into [0, 1]^2 (e.g. subtract their integer "
-      "part)");
+      "], outside the image [0, 1]^2, so no texel would change; a texture that wraps is read "
+      "there once wrapTextureCoordinates moves its tiles into the image (the command line's "
+      "--wrap), tiled (UDIM) atlases are not supported yet: move the UVs into [0, 1]^2 (e.g. "
+      "subtract their integer part)");
 }
 
 }  // namespace texgrad

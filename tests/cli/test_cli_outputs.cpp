@@ -128,7 +128,8 @@ TEST_P(EveryWritingCommand, RefusesUvsOutsideTheImageNamingTheirRange) {
       {"right.obj", "UVs span u [1, 2] x v [0, 1], outside the image [0, 1]^2"},
       {"up.obj", "UVs span u [0, 1] x v [1, 2], outside the image [0, 1]^2"}};
   for (const auto& [mesh, range] : outside) {
-    const auto args = commandLine(GetParam(), mesh, out());
+    auto args = commandLine(GetParam(), mesh, out());
+    args.insert(args.end(), {"--wrap", "clamp"});  // the default (OBJ: repeat) wraps them
     const CliResult r = runCli(args, dir_);
     EXPECT_NE(r.status, 0) << joined(args);
     EXPECT_EQ(lineCount(r.err), 1) << joined(args) << "\n" << r.err;
@@ -136,6 +137,34 @@ TEST_P(EveryWritingCommand, RefusesUvsOutsideTheImageNamingTheirRange) {
     EXPECT_NE(r.err.find("move the UVs into [0, 1]^2"), std::string::npos) << r.err;
     EXPECT_FALSE(std::filesystem::exists(dir_ / out())) << joined(args);
   }
+}
+
+TEST_P(EveryWritingCommand, WrapsUvsInAnotherTileLikeTheirCopyInTheImage) {
+  // An OBJ names no sampler: its texture repeats, so the square moved by a whole tile writes
+  // the same texels as the square inside the image.
+  ASSERT_EQ(runCli(commandLine(GetParam(), "inside.obj", out("inside")), dir_).status, 0);
+  const Image inside = readImage(dir_ / out("inside"));
+  for (const char* mesh : {"right.obj", "up.obj"}) {
+    const auto args = commandLine(GetParam(), mesh, out());
+    const CliResult r = runCli(args, dir_);
+    ASSERT_EQ(r.status, 0) << joined(args) << "\n" << r.err;
+    EXPECT_EQ(readImage(dir_ / out()).pixels, inside.pixels) << joined(args);
+  }
+}
+
+TEST(Cli, GeodesicUvSourceIsInTheImageTheChartsWereMovedInto) {
+  // --source-uv names a point of the image: on the square moved to v in [1, 2] (and wrapped
+  // back into the image) the same UV is the same surface point, so the distances are the same.
+  const std::filesystem::path dir = tempDir("outputs_geodesic_uv_tile");
+  writeInputs(dir);
+  const auto run = [&](const char* mesh, const char* uv, const char* out) {
+    const CliResult r =
+        runCli({"geodesic", mesh, "-r", "32", "--source-uv", uv, "-o", out, "--quiet"}, dir);
+    EXPECT_EQ(r.status, 0) << r.err;
+    return readImage(dir / out);
+  };
+  EXPECT_EQ(run("up.obj", "0.3,0.6", "up.exr").pixels,
+            run("inside.obj", "0.3,0.6", "inside.exr").pixels);
 }
 
 TEST_P(EveryWritingCommand, RefusesABadOutputBeforeReadingAnyInput) {
@@ -321,7 +350,9 @@ const char* kTwoIslandsObj =
 TEST(Cli, GeodesicRefusesASourceThatReachesNoTexelOfTheImage) {
   const auto dir = tempDir("outputs_geodesic_island");
   writeText(dir / "islands.obj", kTwoIslandsObj);
-  const std::vector<std::string> base{"geodesic", "islands.obj", "-r", "32", "-o", "d.exr"};
+  // With --wrap clamp: a texture that repeats would read the outer island inside the image.
+  const std::vector<std::string> base{"geodesic", "islands.obj", "-r",     "32",
+                                      "-o",       "d.exr",       "--wrap", "clamp"};
   auto inside = base, outside = base;
   inside.insert(inside.end(), {"--source-vertex", "0"});
   outside.insert(outside.end(), {"--source-vertex", "4"});

@@ -37,6 +37,12 @@ FaceVectorField readFaceVectorField(const std::filesystem::path& path, FieldBasi
 /// Writes a field in the format readFaceVectorField reads (atomically); throws IoError.
 void writeFaceVectorField(const std::filesystem::path& path, const FaceVectorField& field);
 
+/// The field as 3-D vectors (Extrinsic) on `mesh`'s faces: an Intrinsic field's (a, b) becomes
+/// a (v1 - v0) + b (v2 - v0). Pieces of a face cut at tile borders (wrapTextureCoordinates) keep
+/// the face's 3-D vector but not its edges, so a field follows them in this form. Throws
+/// InvalidInputError if the face counts differ.
+FaceVectorField extrinsicField(const TexturedMesh& mesh, const FaceVectorField& field);
+
 /// The field as vectors in texel coordinates (grid units), one per face. Extrinsic vectors are
 /// projected onto the face plane by least squares through the face's Jacobian. Faces with zero UV
 /// area or a degenerate 3-D triangle get zero. Throws InvalidInputError if the face counts differ.
