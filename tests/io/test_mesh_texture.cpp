@@ -92,7 +92,11 @@ TEST(MeshTexture, GltfOutputNeedsAMeshReadFromGltf) {
 TEST(MeshTexture, UndecodableEmbeddedImageNamesMeshAndSlot) {
   TexturedMesh mesh = procedural::square();
   mesh.sourcePath = "model.glb";
-  mesh.textures.push_back({"normal", {}, {'n', 'o', 't', ' ', 'p', 'n', 'g'}, "image/png", ""});
+  TextureRef ref;
+  ref.slot = "normal";
+  ref.embedded = {'n', 'o', 't', ' ', 'p', 'n', 'g'};
+  ref.mimeType = "image/png";
+  mesh.textures.push_back(ref);
   try {
     readMeshTexture(mesh, "normal");
     FAIL() << "expected an error";
