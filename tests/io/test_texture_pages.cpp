@@ -113,6 +113,24 @@ TEST(TexturePages, PagesAreAlignedAndApart) {
   EXPECT_EQ(layout.height, 80);
 }
 
+TEST(TexturePages, FacesReachingPastASideWidenTheGapAndOwnTheirColumns) {
+  // Page 1's faces reach 0.1 (12 texels) past its left side, page 0's 0.05 (6) past its right.
+  PageLayout layout = sizedLayout({{120, 8}, {120, 8}});
+  EXPECT_EQ(layout.pages[1].offset, 128);  // without reach: 8 columns apart suffice
+  layout.pages[0].uMax = 1.05;
+  layout.pages[1].uMin = -0.1;
+  arrangePages(layout);
+  const auto [left, ignored] = pageReach(layout.pages[1]);
+  const int rightOfPage0 = pageReach(layout.pages[0]).second;
+  EXPECT_GE(left, 12);
+  EXPECT_GE(rightOfPage0, 6);
+  const int boundary = pageBoundary(layout, 0);
+  // Every column page 1's faces reach is page 1's, every column page 0's reach is page 0's.
+  EXPECT_LE(boundary, layout.pages[1].offset - left);
+  EXPECT_GT(boundary, layout.pages[0].width + rightOfPage0 - 1);
+  EXPECT_EQ(layout.pages[1].offset % kPageAlignment, 0);
+}
+
 TEST(TexturePages, ComposeClampsToTheNearestPageAndSplitRoundTrips) {
   const PageLayout layout = sizedLayout({{100, 50}, {30, 80}});
   const std::vector<Image> pages{rampImage(100, 50, 0.0f), rampImage(30, 80, 1000.0f)};
