@@ -2,6 +2,7 @@
 // (texture_pages.h); this file only chooses between one page (today's path) and several.
 #include "cli_pages.h"
 
+#include <array>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
@@ -52,12 +53,12 @@ std::optional<PagedTexture> placeOnPagesOfImages(const TexturedMesh& mesh) {
   return paged;
 }
 
-void requireSinglePage(const PageLayout& layout, const std::string& option) {
+void requireSinglePage(const PageLayout& layout, const std::string& option,
+                       const std::string& instead) {
   if (layout.pages.size() > 1)
-    throw UnsupportedError(option + " takes one image, but the " + layout.slot + " texture has " +
-                           std::to_string(layout.pages.size()) +
-                           " pages (UDIM tiles or materials); leave it out for a multi-page "
-                           "texture");
+    throw UnsupportedError(option + " is not supported yet when the " + layout.slot +
+                           " texture has " + std::to_string(layout.pages.size()) +
+                           " pages (UDIM tiles or materials); " + instead);
 }
 
 void checkPagedOutputArgs(const std::string& out, const PageLayout& layout,
@@ -106,8 +107,11 @@ void printWrittenPages(bool quiet, const std::string& out, const PageLayout& lay
     files << (p == 0 ? "" : ", ") << pageOutputPath(out, layout, p).string() << " ("
           << layout.pages[p].width << "x" << layout.pages[p].height << ")";
   std::ostringstream line;
+  static constexpr std::array<const char*, 4> kChannels{"1-channel", "2-channel", "RGB", "RGBA"};
   line << "wrote " << layout.pages.size() << (layout.pages.size() == 1 ? " page: " : " pages: ")
-       << files.str() << ", " << image.channels << " channels " << pixelFormatName(stored);
+       << files.str() << ", "
+       << (image.channels >= 1 && image.channels <= 4 ? kChannels[size_t(image.channels - 1)] : "?")
+       << " " << pixelFormatName(stored);
   if (texels >= 0) line << ", " << texels << " texels solved";
   char time[32];
   std::snprintf(time, sizeof time, " in %.1f s", seconds);

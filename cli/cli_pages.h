@@ -43,8 +43,10 @@ PagedTexture placeOnPagesOfSize(TexturedMesh mesh, int width, int height);
 /// on them; nullopt if the texture is one page (the caller keeps its own choice of size).
 std::optional<PagedTexture> placeOnPagesOfImages(const TexturedMesh& mesh);
 
-/// Refuses, naming `option`, an input that holds one image when the texture has several pages.
-void requireSinglePage(const PageLayout& layout, const std::string& option);
+/// Refuses, naming `option` and saying what to do `instead`, an option not supported yet when
+/// the texture has several pages.
+void requireSinglePage(const PageLayout& layout, const std::string& option,
+                       const std::string& instead);
 
 /// Checks, before the work, that every page of `out` can be written: checkImageOutput for each
 /// page's file; a glTF output of several pages is refused (one line).

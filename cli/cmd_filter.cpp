@@ -33,7 +33,7 @@ void runFilter(FilterArgs args) {
   PagedTexture paged = loadPagedTexture(loadMesh(args.mesh, args.weldTolerance), args.mesh,
                                         args.texture, args.slot);
   checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
-  if (!args.betaMap.empty()) requireSinglePage(paged.layout, "--beta-map");
+  if (!args.betaMap.empty()) requireSinglePage(paged.layout, "--beta-map", "filter with --beta");
   const int width = paged.image.width, height = paged.image.height;
   reportProgress(progress, "read", 1.0);
   timer.lap("read");

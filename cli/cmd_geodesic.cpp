@@ -156,7 +156,7 @@ void runGeodesic(GeodesicArgs args) {
                               args.mesh + " has " + std::to_string(mesh.positions.size()) +
                               " vertices (0-based)");
   PagedTexture paged = placeOnGeodesicPages(args, std::move(mesh));
-  if (!args.sourceUvs.empty()) requireSinglePage(paged.layout, "--source-uv");
+  if (!args.sourceUvs.empty()) requireSinglePage(paged.layout, "--source-uv", "use --source-point or --source-vertex");
   const int width = paged.layout.width, height = paged.layout.height;
   reportProgress(progress, "read", 1.0);
   timer.lap("read");

@@ -26,7 +26,7 @@ void runSeams(const SeamsArgs& args) {
   PagedTexture paged = loadPagedTexture(loadMesh(args.mesh, args.weldTolerance), args.mesh,
                                         args.texture, args.slot);
   checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
-  if (!args.mask.empty()) requireSinglePage(paged.layout, "--mask");
+  if (!args.mask.empty()) requireSinglePage(paged.layout, "--mask", "leave it out");
   const Image& texture = paged.image;
   const Image mask = args.mask.empty() ? Image() : readImage(args.mask);
   reportProgress(progress, "read", 1.0);

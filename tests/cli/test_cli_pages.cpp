@@ -154,6 +154,23 @@ TEST(CliPages, UdimTilesAreListedProcessedAndAMissingTileNamed) {
   ASSERT_EQ(filter.status, 0) << filter.err;
   for (const char* tile : {"1001", "1002", "1011", "1012"})
     EXPECT_EQ(readImage(dir / ("out." + std::string(tile) + ".png")).width, 64) << tile;
+  // Every command that makes or reads the texture writes one image per tile.
+  const std::vector<std::vector<std::string>> commands{
+      {"dilate", "tiles.obj", "--out", "d.<UDIM>.png"},
+      {"seams", "tiles.obj", "--out", "s.<UDIM>.png"},
+      {"geodesic", "tiles.obj", "--source-vertex", "0", "--out", "g.<UDIM>.exr"},
+      {"lic", "tiles.obj", "-r", "64", "--out", "l.<UDIM>.png"},
+      {"react", "tiles.obj", "-r", "64", "--steps", "20", "--out", "r.<UDIM>.png"}};
+  for (const std::vector<std::string>& command : commands) {
+    const CliResult run = runCli(command, dir);
+    ASSERT_EQ(run.status, 0) << command[0] << ": " << run.err;
+    const std::string pattern = command.back();
+    for (const char* tile : {"1001", "1002", "1011", "1012"}) {
+      std::string file = pattern;
+      file.replace(file.find("<UDIM>"), 6, tile);
+      EXPECT_EQ(readImage(dir / file).width, 64) << file;
+    }
+  }
   const CliResult gltf = runCli({"filter", "tiles.obj", "--out", "out.glb", "-q"}, dir);
   EXPECT_EQ(gltf.status, 1);
   EXPECT_EQ(lineCount(gltf.err), 1) << gltf.err;
