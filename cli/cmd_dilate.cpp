@@ -36,8 +36,8 @@ void runDilate(const DilateArgs& args) {
   args.options.validate();
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   StageTimer timer;
-  const PagedTexture paged = loadPagedTexture(loadMesh(args.mesh, args.weldTolerance), args.mesh,
-                                              args.texture, args.slot);
+  const PagedTexture paged =
+      loadPagedTexture(loadMesh(args.mesh, args.weldTolerance), args.mesh, args.texture, args.slot);
   checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
   const TexturedMesh& mesh = paged.mesh;
   requireUvsInImage(mesh);
@@ -74,9 +74,9 @@ void addDilateCommand(CLI::App& app) {
       "there is one; further rings average their filled neighbours. Active texels are unchanged.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
-  cmd->add_option("texture", args->texture,
-                  std::string("Texture to pad (default: the mesh's --texture-slot texture)") +
-                      kPagedInputHelp);
+  cmd->add_option(
+      "texture", args->texture,
+      std::string("Texture to pad (default: the mesh's --texture-slot texture)") + kPagedInputHelp);
   cmd->add_option("--out,-o", args->out,
                   std::string("Output image, or .gltf/.glb for a glTF copy") + kPagedOutputHelp)
       ->required();

@@ -30,8 +30,8 @@ void runFilter(FilterArgs args) {
   if (args.options.normalMap && args.slot == "baseColor") args.slot = "normal";
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  PagedTexture paged = loadPagedTexture(loadMesh(args.mesh, args.weldTolerance), args.mesh,
-                                        args.texture, args.slot);
+  PagedTexture paged =
+      loadPagedTexture(loadMesh(args.mesh, args.weldTolerance), args.mesh, args.texture, args.slot);
   checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
   if (!args.betaMap.empty()) requireSinglePage(paged.layout, "--beta-map", "filter with --beta");
   const int width = paged.image.width, height = paged.image.height;
@@ -57,8 +57,8 @@ void runFilter(FilterArgs args) {
   }
   // One run, one filter: the filter takes the texture (and writes its result there) and frees
   // the operators once its solver has what it needs (docs/memory.md).
-  const FilterResult result =
-      filterTexture(domain, domain.releaseOperators(), std::move(paged.image), args.options, progress);
+  const FilterResult result = filterTexture(domain, domain.releaseOperators(),
+                                            std::move(paged.image), args.options, progress);
   timer.lap("solve");
   const PixelFormat stored = runStage(progress, "write", [&] {
     return writePagedTexture(args.out, domain.mesh(), paged.layout, result.image, args.slot,

@@ -156,7 +156,8 @@ void runGeodesic(GeodesicArgs args) {
                               args.mesh + " has " + std::to_string(mesh.positions.size()) +
                               " vertices (0-based)");
   PagedTexture paged = placeOnGeodesicPages(args, std::move(mesh));
-  if (!args.sourceUvs.empty()) requireSinglePage(paged.layout, "--source-uv", "use --source-point or --source-vertex");
+  if (!args.sourceUvs.empty())
+    requireSinglePage(paged.layout, "--source-uv", "use --source-point or --source-vertex");
   const int width = paged.layout.width, height = paged.layout.height;
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
@@ -237,9 +238,9 @@ void addGeodesicCommand(CLI::App& app) {
       "connects to; gutter texels are padded.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
-  cmd->add_option("--out,-o", args->out,
-                  std::string("Distance image, one float channel (.exr recommended)") +
-                      kPagedOutputHelp)
+  cmd->add_option(
+         "--out,-o", args->out,
+         std::string("Distance image, one float channel (.exr recommended)") + kPagedOutputHelp)
       ->required();
   cmd->add_option("--png", args->png,
                   "Also write a colour picture: viridis from 0 to the largest distance, with "

@@ -56,8 +56,8 @@ void runReact(ReactArgs args) {
   timer.lap("read");
   PagedTexture paged = placeOnPagesOfSize(std::move(mesh), width, height);
   checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
-  const TexelDomain domain(std::move(paged.mesh), paged.layout.width, paged.layout.height, OperatorOptions::assembledOnce(),
-                           progress);
+  const TexelDomain domain(std::move(paged.mesh), paged.layout.width, paged.layout.height,
+                           OperatorOptions::assembledOnce(), progress);
   timer.lap("operators");
   const ReactionResult result = reactionDiffusion(domain, args.options, args.steps, progress);
   timer.lap("steps");

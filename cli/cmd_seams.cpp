@@ -23,8 +23,8 @@ void runSeams(const SeamsArgs& args) {
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  PagedTexture paged = loadPagedTexture(loadMesh(args.mesh, args.weldTolerance), args.mesh,
-                                        args.texture, args.slot);
+  PagedTexture paged =
+      loadPagedTexture(loadMesh(args.mesh, args.weldTolerance), args.mesh, args.texture, args.slot);
   checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
   if (!args.mask.empty()) requireSinglePage(paged.layout, "--mask", "leave it out");
   const Image& texture = paged.image;
@@ -78,9 +78,9 @@ void addSeamsCommand(CLI::App& app) {
       "bit.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
-  cmd->add_option("texture", args->texture,
-                  std::string("Texture (default: the mesh's --texture-slot texture)") +
-                      kPagedInputHelp);
+  cmd->add_option(
+      "texture", args->texture,
+      std::string("Texture (default: the mesh's --texture-slot texture)") + kPagedInputHelp);
   cmd->add_option("--out,-o", args->out,
                   std::string("Output image, or .gltf/.glb for a glTF copy") + kPagedOutputHelp)
       ->required();
