@@ -48,6 +48,10 @@ std::optional<PagedTexture> placeOnPagesOfImages(const TexturedMesh& mesh);
 void requireSinglePage(const PageLayout& layout, const std::string& option,
                        const std::string& instead);
 
+/// Refuses, naming `command`, a mesh whose base-colour texture has several pages, for the
+/// commands that do not place meshes on pages yet (their UVs would overlap in one image).
+void requireOnePageMesh(const TexturedMesh& mesh, const std::string& command);
+
 /// Checks, before the work, that every page of `out` can be written: checkImageOutput for each
 /// page's file; a glTF output of several pages is refused (one line).
 void checkPagedOutputArgs(const std::string& out, const PageLayout& layout,

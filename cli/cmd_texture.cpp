@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "cli_common.h"
+#include "cli_pages.h"
 #include "commands.h"
 #include "photo_args.h"
 #include "texgrad/apps/dilate.h"
@@ -34,6 +35,7 @@ void runTexture(TextureArgs args) {
   const ProgressCallback progress = progressDisplay(args.report);
   TexturedMesh mesh =
       runStage(progress, "read", [&] { return loadMesh(args.mesh, args.weldTolerance); });
+  requireOnePageMesh(mesh, "texture");
   timer.lap("read");
   TexelDomain domain(std::move(mesh), width, height, {}, progress);
   timer.lap("operators");
