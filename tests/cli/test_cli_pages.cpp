@@ -193,6 +193,12 @@ TEST(CliPages, InfoListsMaterialPages) {
       << info.out;
   EXPECT_NE(info.out.find("page m1: " + (dir / "b.png").string() + ", 48x16, "), std::string::npos)
       << info.out;
+  // A command that does not place meshes on pages yet refuses, rather than overlap the pages.
+  const CliResult stitch = runCli(
+      {"stitch", "two.obj", "--composite", "a.png", "--segments", "a.png", "--out", "s.png"}, dir);
+  EXPECT_EQ(stitch.status, 1);
+  EXPECT_EQ(lineCount(stitch.err), 1) << stitch.err;
+  EXPECT_NE(stitch.err.find("2 pages"), std::string::npos) << stitch.err;
   std::filesystem::remove_all(dir);
 }
 
