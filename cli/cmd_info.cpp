@@ -125,7 +125,7 @@ bool printTextures(const TexturedMesh& mesh, const std::vector<SlotPages>& pages
               << (t.faces == 1 ? " face\n" : " faces\n");
   bool missingImage = false;
   for (const TextureRef& t : mesh.textures)
-    if (!t.path.empty() && !pathExists(t.path)) {
+    if (!t.path.empty() && !hasUdimToken(t.path) && !pathExists(t.path)) {  // tiles: pages
       std::cout << "  warning the " << t.slot << " image " << t.path.string() << " (" << t.origin
                 << ") was not found\n";
       missingImage = true;
