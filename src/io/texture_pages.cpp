@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <sstream>
 #include <string_view>
 
 #include "texgrad/core/error.h"
@@ -24,6 +25,13 @@ std::pair<size_t, size_t> findToken(const std::string& text) {
   for (std::string_view token : kUdimTokens)
     if (const size_t at = text.find(token); at != std::string::npos) return {at, token.size()};
   return {std::string::npos, 0};
+}
+
+/// A tile coordinate as a message shows it ("10", "-1", "nan").
+std::string numberText(double value) {
+  std::ostringstream text;
+  text << value;
+  return text.str();
 }
 
 /// "face 12 (of material 'wood')" for messages.
@@ -63,8 +71,14 @@ void addFace(PageLayout& layout, const TexturedMesh& mesh, size_t p, size_t f) {
 std::array<int, 2> faceTile(const TexturedMesh& mesh, size_t f) {
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
   for (int32_t t : mesh.uvTriangles[f]) centroid += mesh.uvs[static_cast<size_t>(t)] / 3.0;
-  const std::array<int, 2> tile{static_cast<int>(std::floor(centroid.x())),
-                                static_cast<int>(std::floor(centroid.y()))};
+  const double rows = (kLastUdim - kFirstUdim + 1) / kUdimColumns;
+  const double k = std::floor(centroid.x()), l = std::floor(centroid.y());
+  if (!(k >= 0.0 && k < kUdimColumns && l >= 0.0 && l < rows))  // also NaN, before any cast
+    throw InvalidInputError(mesh.sourcePath.string() + ": " + describeFace(mesh, f) +
+                            " lies in UV tile (" + numberText(k) + ", " + numberText(l) +
+                            "), outside the UDIM tiles 1001..1100 (u and v in [0, 10)); move its "
+                            "chart into a tile");
+  const std::array<int, 2> tile{static_cast<int>(k), static_cast<int>(l)};
   for (int32_t t : mesh.uvTriangles[f]) {
     const Eigen::Vector2d& uv = mesh.uvs[static_cast<size_t>(t)];
     for (int axis = 0; axis < 2; ++axis)
@@ -75,12 +89,6 @@ std::array<int, 2> faceTile(const TexturedMesh& mesh, size_t f) {
             std::to_string(uv.x()) + ", " + std::to_string(uv.y()) +
             "); cut the UV charts along the tile borders so that every face lies in one tile");
   }
-  if (tile[0] < 0 || tile[0] >= kUdimColumns || tile[1] < 0 ||
-      tile[1] >= (kLastUdim - kFirstUdim + 1) / kUdimColumns)
-    throw InvalidInputError(mesh.sourcePath.string() + ": " + describeFace(mesh, f) +
-                            " lies in UV tile (" + std::to_string(tile[0]) + ", " +
-                            std::to_string(tile[1]) + "), outside the UDIM tiles 1001..1100 " +
-                            "(u and v in [0, 10)); move its chart into a tile");
   return tile;
 }
 
@@ -127,6 +135,11 @@ PageLayout materialPages(const TexturedMesh& mesh, const std::vector<int>& refs,
   for (int t : refs) {
     const TextureRef& ref = mesh.textures[static_cast<size_t>(t)];
     TexturePage page;
+    for (int32_t m : ref.materials)
+      if (m < 0 || static_cast<size_t>(m) >= mesh.materials.size())
+        throw InvalidInputError(mesh.sourcePath.string() + ": texture " + ref.origin +
+                                " names material " + std::to_string(m) + " but there are " +
+                                std::to_string(mesh.materials.size()) + " materials");
     // Named after its material when it has one, else after its image file.
     page.name = fileSafe(ref.materials.size() == 1
                              ? mesh.materials[static_cast<size_t>(ref.materials.front())]
