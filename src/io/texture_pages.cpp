@@ -27,6 +27,11 @@ std::pair<size_t, size_t> findToken(const std::string& text) {
   return {std::string::npos, 0};
 }
 
+/// How messages name the mesh: its file, or "the mesh" for a procedural one.
+std::string meshName(const TexturedMesh& mesh) {
+  return mesh.sourcePath.empty() ? "the mesh" : mesh.sourcePath.string();
+}
+
 /// A tile coordinate as a message shows it ("10", "-1", "nan").
 std::string numberText(double value) {
   std::ostringstream text;
@@ -74,8 +79,8 @@ std::array<int, 2> faceTile(const TexturedMesh& mesh, size_t f) {
   const double rows = (kLastUdim - kFirstUdim + 1) / kUdimColumns;
   const double k = std::floor(centroid.x()), l = std::floor(centroid.y());
   if (!(k >= 0.0 && k < kUdimColumns && l >= 0.0 && l < rows))  // also NaN, before any cast
-    throw InvalidInputError(mesh.sourcePath.string() + ": " + describeFace(mesh, f) +
-                            " lies in UV tile (" + numberText(k) + ", " + numberText(l) +
+    throw InvalidInputError(meshName(mesh) + ": " + describeFace(mesh, f) + " lies in UV tile (" +
+                            numberText(k) + ", " + numberText(l) +
                             "), outside the UDIM tiles 1001..1100 (u and v in [0, 10)); move its "
                             "chart into a tile");
   const std::array<int, 2> tile{static_cast<int>(k), static_cast<int>(l)};
@@ -85,7 +90,7 @@ std::array<int, 2> faceTile(const TexturedMesh& mesh, size_t f) {
       if (uv[axis] < tile[static_cast<size_t>(axis)] ||
           uv[axis] > tile[static_cast<size_t>(axis)] + 1)
         throw InvalidInputError(
-            mesh.sourcePath.string() + ": " + describeFace(mesh, f) + " straddles UDIM tiles (UV " +
+            meshName(mesh) + ": " + describeFace(mesh, f) + " straddles UDIM tiles (UV " +
             std::to_string(uv.x()) + ", " + std::to_string(uv.y()) +
             "); cut the UV charts along the tile borders so that every face lies in one tile");
   }
@@ -137,8 +142,8 @@ PageLayout materialPages(const TexturedMesh& mesh, const std::vector<int>& refs,
     TexturePage page;
     for (int32_t m : ref.materials)
       if (m < 0 || static_cast<size_t>(m) >= mesh.materials.size())
-        throw InvalidInputError(mesh.sourcePath.string() + ": texture " + ref.origin +
-                                " names material " + std::to_string(m) + " but there are " +
+        throw InvalidInputError(meshName(mesh) + ": texture " + ref.origin + " names material " +
+                                std::to_string(m) + " but there are " +
                                 std::to_string(mesh.materials.size()) + " materials");
     // Named after its material when it has one, else after its image file.
     page.name = fileSafe(ref.materials.size() == 1
@@ -157,7 +162,7 @@ PageLayout materialPages(const TexturedMesh& mesh, const std::vector<int>& refs,
     const int32_t m = f < mesh.faceMaterial.size() ? mesh.faceMaterial[f] : -1;
     const int32_t p = m >= 0 ? pageOfMaterial[static_cast<size_t>(m)] : -1;
     if (p < 0)
-      throw InvalidInputError(mesh.sourcePath.string() + ": " + describeFace(mesh, f) +
+      throw InvalidInputError(meshName(mesh) + ": " + describeFace(mesh, f) +
                               (m < 0 ? " has no material" : "'s material has no image") +
                               ", but the mesh's other faces use " +
                               std::to_string(layout.pages.size()) + " " + layout.slot +
@@ -252,9 +257,8 @@ void requirePageImage(const PageLayout& layout, const TexturedMesh& mesh, size_t
   const TexturePage& page = layout.pages.at(p);
   if (page.path.empty() || pathExists(page.path)) return;
   throw IoError(page.path.string() + " was not found: it is " + describePage(page, layout.udim) +
-                " of " + (mesh.sourcePath.empty() ? "the mesh" : mesh.sourcePath.string()) + "'s " +
-                layout.slot + " texture, needed by " + describeUsers(mesh, page) +
-                "; restore the image or fix the reference");
+                " of " + meshName(mesh) + "'s " + layout.slot + " texture, needed by " +
+                describeUsers(mesh, page) + "; restore the image or fix the reference");
 }
 
 namespace {
