@@ -25,6 +25,7 @@
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/mesh_texture.h"
 #include "texgrad/io/procedural.h"
+#include "texgrad/io/texture_pages.h"
 #include "texgrad/io/uv_tiles.h"
 
 namespace texgrad::cli {
@@ -268,9 +269,9 @@ void addWrapOption(CLI::App* cmd, std::string& wrap) {
 }
 
 TexturedMesh wrapMesh(TexturedMesh mesh, const std::string& wrap, const std::string& slot,
-                      std::vector<int32_t>* parentFace) {
+                      const std::string& texture, std::vector<int32_t>* parentFace) {
   const UvWrap mode = parseUvWrap(wrap, mesh, slot);
-  WrappedMesh wrapped = wrapTextureCoordinates(std::move(mesh), mode);
+  WrappedMesh wrapped = meshForPages(std::move(mesh), mode, slot, texture);
   if (parentFace) *parentFace = std::move(wrapped.parentFace);
   return std::move(wrapped.mesh);
 }

@@ -62,11 +62,12 @@ void addMeshReadOptions(CLI::App* cmd, MeshReadOptions& options);
 /// Registers --wrap (auto, repeat, mirror, clamp: how the texture is sampled outside [0, 1]^2).
 void addWrapOption(CLI::App* cmd, std::string& wrap);
 
-/// The mesh as the texture in `slot` reads it under --wrap `wrap` (parseUvWrap,
-/// wrapTextureCoordinates): charts in other UV tiles moved into the image, faces straddling a
-/// tile border cut. `parentFace`, if given, receives each face's face in `mesh`.
+/// The mesh as the texture in `slot` (or `texture`, the file the user names) reads it under
+/// --wrap `wrap` (parseUvWrap, meshForPages): charts in other UV tiles moved into the image,
+/// faces straddling a tile border cut; UDIM tiles are pages and stay in place, only cut.
+/// `parentFace`, if given, receives each face's face in `mesh`.
 TexturedMesh wrapMesh(TexturedMesh mesh, const std::string& wrap, const std::string& slot,
-                      std::vector<int32_t>* parentFace = nullptr);
+                      const std::string& texture = {}, std::vector<int32_t>* parentFace = nullptr);
 
 /// Registers --raw (keep the solver's values at barely covered texels; the library's
 /// rawSolution option).

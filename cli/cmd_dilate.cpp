@@ -2,6 +2,7 @@
 #include <cstdint>
 
 #include "cli_common.h"
+#include "cli_pages.h"
 #include "commands.h"
 #include "texgrad/apps/dilate.h"
 #include "texgrad/atlas/atlas.h"
@@ -36,18 +37,22 @@ void runDilate(const DilateArgs& args) {
   args.options.validate();
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   StageTimer timer;
-  const TexturedMesh mesh = wrapMesh(loadMesh(args.mesh, args.read), args.wrap, args.slot);
+  const PagedTexture paged =
+      loadPagedTexture(wrapMesh(loadMesh(args.mesh, args.read), args.wrap, args.slot, args.texture),
+                       args.mesh, args.texture, args.slot);
+  checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
+  const TexturedMesh& mesh = paged.mesh;
   requireUvsInImage(mesh);
-  const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
+  const Image& texture = paged.image;
   timer.lap("read");
   const Atlas atlas = buildAtlas(mesh);
   const TexelGrid grid = buildTexelGrid(mesh, atlas, texture.width, texture.height);
   const Image padded = dilateGutters(mesh, atlas, grid, texture, args.options);
   timer.lap("dilate");
-  const PixelFormat stored =
-      writeTextureOutput(args.out, mesh, padded, args.slot, args.bitDepth, args.report.quiet);
+  const PixelFormat stored = writePagedTexture(args.out, mesh, paged.layout, padded, args.slot,
+                                               args.bitDepth, args.report.quiet);
   timer.lap("write");
-  printWritten(args.report.quiet, args.out, padded, stored, -1, timer.total());
+  printWrittenPages(args.report.quiet, args.out, paged.layout, padded, stored, -1, timer.total());
   if (args.report.timings) timer.print();
   if (args.report.json)
     printJson({{"command", "dilate"},
@@ -71,9 +76,12 @@ void addDilateCommand(CLI::App& app) {
       "there is one; further rings average their filled neighbours. Active texels are unchanged.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
-  cmd->add_option("texture", args->texture,
-                  "Texture to pad (default: the mesh's --texture-slot texture)");
-  cmd->add_option("--out,-o", args->out, "Output image, or .gltf/.glb for a glTF copy")->required();
+  cmd->add_option(
+      "texture", args->texture,
+      std::string("Texture to pad (default: the mesh's --texture-slot texture)") + kPagedInputHelp);
+  cmd->add_option("--out,-o", args->out,
+                  std::string("Output image, or .gltf/.glb for a glTF copy") + kPagedOutputHelp)
+      ->required();
   auto* radius = cmd->add_option("--radius", args->options.radius, "Rings of gutter texels to fill")
                      ->default_val(4)
                      ->check(CLI::NonNegativeNumber);

@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "cli_common.h"
+#include "cli_pages.h"
 #include "commands.h"
 #include "texgrad/apps/filter.h"
 #include "texgrad/apps/texel_signal.h"
@@ -30,9 +31,12 @@ void runFilter(FilterArgs args) {
   if (args.options.normalMap && args.slot == "baseColor") args.slot = "normal";
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  TexturedMesh mesh = wrapMesh(loadMesh(args.mesh, args.read), args.wrap, args.slot);
-  Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
-  const int width = texture.width, height = texture.height;
+  PagedTexture paged =
+      loadPagedTexture(wrapMesh(loadMesh(args.mesh, args.read), args.wrap, args.slot, args.texture),
+                       args.mesh, args.texture, args.slot);
+  checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
+  if (!args.betaMap.empty()) requireSinglePage(paged.layout, "--beta-map", "filter with --beta");
+  const int width = paged.image.width, height = paged.image.height;
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
   // Only a beta map (S_beta) re-assembles the stiffness; otherwise the piece integrals go.
@@ -46,7 +50,7 @@ void runFilter(FilterArgs args) {
         "--seam-weight applies to --basis bilinear only (the continuous "
         "basis has no seam jumps to penalise)");
   }
-  TexelDomain domain(std::move(mesh), width, height, operatorOptions, progress);
+  TexelDomain domain(std::move(paged.mesh), width, height, operatorOptions, progress);
   timer.lap("operators");
   if (!args.betaMap.empty()) {
     const Image map = readImage(args.betaMap);
@@ -55,20 +59,22 @@ void runFilter(FilterArgs args) {
   }
   // One run, one filter: the filter takes the texture (and writes its result there) and frees
   // the operators once its solver has what it needs (docs/memory.md).
-  const FilterResult result =
-      filterTexture(domain, domain.releaseOperators(), std::move(texture), args.options, progress);
+  const FilterResult result = filterTexture(domain, domain.releaseOperators(),
+                                            std::move(paged.image), args.options, progress);
   timer.lap("solve");
   const PixelFormat stored = runStage(progress, "write", [&] {
-    return writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth,
-                              args.report.quiet);
+    return writePagedTexture(args.out, domain.mesh(), paged.layout, result.image, args.slot,
+                             args.bitDepth, args.report.quiet);
   });
   timer.lap("write");
-  printWritten(args.report.quiet, args.out, result.image, stored, domain.unknowns(), timer.total());
+  printWrittenPages(args.report.quiet, args.out, paged.layout, result.image, stored,
+                    domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();
   if (args.report.json)
     printJson({{"command", "filter"},
                {"texels", domain.unknowns()},
                {"resolution", {width, height}},
+               {"pages", paged.layout.pages.size()},
                {"solver", toString(args.options.solver.kind)},
                {"init_seconds", result.initSeconds},
                {"update_seconds", result.updateSeconds},
@@ -98,10 +104,13 @@ void addFilterCommand(CLI::App& app) {
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   cmd->add_option("texture", args->texture,
-                  "Texture to filter (default: the mesh's texture in --texture-slot)");
+                  std::string("Texture to filter (default: the mesh's texture in "
+                              "--texture-slot)") +
+                      kPagedInputHelp);
   cmd->add_option("--out,-o", args->out,
                   "Output image (.png .jpg .exr .tif), or .gltf/.glb for a copy of a glTF asset "
-                  "with the filtered texture")
+                  "with the filtered texture" +
+                      std::string(kPagedOutputHelp))
       ->required();
   cmd->add_option("--beta", args->options.beta,
                   "Gradient scale: 0 = strongest smoothing, 1 = unchanged, > 1 sharpens")

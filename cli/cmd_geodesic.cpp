@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "cli_common.h"
+#include "cli_pages.h"
 #include "commands.h"
 #include "texgrad/apps/dilate.h"
 #include "texgrad/apps/distance_colour_map.h"
@@ -88,6 +89,22 @@ std::pair<int, int> chooseResolution(const GeodesicArgs& args, const TexturedMes
   }
 }
 
+/// The mesh placed on its pages: each --resolution, else each page image's size for a
+/// multi-page texture, else chooseResolution's one page.
+PagedTexture placeOnGeodesicPages(const GeodesicArgs& args, TexturedMesh mesh) {
+  if (args.resolution.empty())
+    if (std::optional<PagedTexture> paged = placeOnPagesOfImages(mesh)) {
+      checkPagedOutputArgs(args.out, paged->layout, "");
+      if (!args.png.empty()) checkPagedOutputArgs(args.png, paged->layout, "");
+      return std::move(*paged);
+    }
+  const auto [width, height] = chooseResolution(args, mesh);
+  PagedTexture paged = placeOnPagesOfSize(std::move(mesh), width, height);
+  checkPagedOutputArgs(args.out, paged.layout, "");
+  if (!args.png.empty()) checkPagedOutputArgs(args.png, paged.layout, "");
+  return paged;
+}
+
 /// "U,V" as the user would type it.
 std::string uvText(const Eigen::Vector2d& uv) {
   char text[64];
@@ -139,11 +156,14 @@ void runGeodesic(GeodesicArgs args) {
       throw InvalidInputError("--source-vertex " + std::to_string(s.vertex) + " is out of range; " +
                               args.mesh + " has " + std::to_string(mesh.positions.size()) +
                               " vertices (0-based)");
-  const auto [width, height] = chooseResolution(args, mesh);
   mesh = wrapMesh(std::move(mesh), args.wrap, "baseColor");  // vertex indices are kept
+  PagedTexture paged = placeOnGeodesicPages(args, std::move(mesh));
+  if (!args.sourceUvs.empty())
+    requireSinglePage(paged.layout, "--source-uv", "use --source-point or --source-vertex");
+  const int width = paged.layout.width, height = paged.layout.height;
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
+  const TexelDomain domain(std::move(paged.mesh), width, height, OperatorOptions::assembledOnce(),
                            progress);
   requireUvSourcesOnCharts(domain, sources, args.mesh);
   timer.lap("operators");
@@ -153,22 +173,24 @@ void runGeodesic(GeodesicArgs args) {
 
   Image distances(width, height, 1, PixelFormat::Float);
   scatterTexels(domain.grid(), result.distances, distances);
-  const PixelFormat stored =
-      writeImage(args.out, dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), distances),
-                 PixelFormat::Float);
+  const PixelFormat stored = writePagedImage(
+      args.out, paged.layout,
+      dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), distances), PixelFormat::Float);
   std::optional<PixelFormat> pictureStored;
   Image picture;
   if (!args.png.empty()) {
     picture = dilateGutters(
         domain.mesh(), domain.atlas(), domain.grid(),
         distanceColourMap(domain.grid(), result.distances, result.maxDistance, args.isolines));
-    pictureStored = writeImage(args.png, picture, PixelFormat::UInt8);
+    pictureStored = writePagedImage(args.png, paged.layout, picture, PixelFormat::UInt8);
   }
   reportProgress(progress, "write", 1.0);
   timer.lap("write");
-  printWritten(args.report.quiet, args.out, distances, stored, domain.unknowns(), timer.total());
+  printWrittenPages(args.report.quiet, args.out, paged.layout, distances, stored, domain.unknowns(),
+                    timer.total());
   if (pictureStored)
-    printWritten(args.report.quiet, args.png, picture, *pictureStored, -1, timer.total());
+    printWrittenPages(args.report.quiet, args.png, paged.layout, picture, *pictureStored, -1,
+                      timer.total());
   if (args.report.timings) timer.print();
   if (!args.report.json) return;
   nlohmann::json resolved = nlohmann::json::array();
@@ -218,7 +240,9 @@ void addGeodesicCommand(CLI::App& app) {
       "connects to; gutter texels are padded.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
-  cmd->add_option("--out,-o", args->out, "Distance image, one float channel (.exr recommended)")
+  cmd->add_option(
+         "--out,-o", args->out,
+         std::string("Distance image, one float channel (.exr recommended)") + kPagedOutputHelp)
       ->required();
   cmd->add_option("--png", args->png,
                   "Also write a colour picture: viridis from 0 to the largest distance, with "

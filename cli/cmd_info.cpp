@@ -11,6 +11,7 @@
 #include "texgrad/atlas/texel_grid.h"
 #include "texgrad/core/path_exists.h"
 #include "texgrad/io/image_io.h"
+#include "texgrad/io/texture_pages.h"
 
 namespace texgrad::cli {
 namespace {
@@ -33,17 +34,91 @@ void printIds(const AtlasIssue& issue, int maxIds) {
   std::cout << "\n";
 }
 
-/// Slots in which the faces use several different images (processing refuses those).
-std::vector<std::string> multiPageSlots(const TexturedMesh& mesh) {
+/// One texture slot's pages (findTexturePages), each image's size when it can be read, and
+/// one line per problem (a missing page image, a face no page holds).
+struct SlotPages {
+  std::string slot;
+  PageLayout layout;
+  std::vector<std::string> problems;
+};
+
+/// The pages of every slot the mesh names (of `texture` alone when it holds a UDIM token).
+std::vector<SlotPages> findPages(const TexturedMesh& mesh, const std::string& texture) {
   std::vector<std::string> slots;
+  if (hasUdimToken(texture)) slots.push_back("baseColor");
   for (const TextureRef& t : mesh.textures)
-    if (mesh.texture(t.slot) != &t && std::find(slots.begin(), slots.end(), t.slot) == slots.end())
+    if (texture.empty() && std::find(slots.begin(), slots.end(), t.slot) == slots.end())
       slots.push_back(t.slot);
-  return slots;
+  std::vector<SlotPages> all;
+  for (const std::string& slot : slots) {
+    SlotPages pages{slot, {}, {}};
+    try {
+      pages.layout = findTexturePages(mesh, slot, hasUdimToken(texture) ? texture : "");
+    } catch (const Error& e) {
+      pages.problems.push_back(e.what());
+      all.push_back(std::move(pages));
+      continue;
+    }
+    for (size_t p = 0; p < pages.layout.pages.size(); ++p) {
+      TexturePage& page = pages.layout.pages[p];
+      try {
+        requirePageImage(pages.layout, mesh, p);
+        if (!page.path.empty()) std::tie(page.width, page.height) = readImageSize(page.path);
+      } catch (const Error& e) {
+        pages.problems.push_back(e.what());
+      }
+    }
+    all.push_back(std::move(pages));
+  }
+  return all;
 }
 
-/// Prints the textures and missing files; returns true if there is anything to warn about.
-bool printTextures(const TexturedMesh& mesh) {
+/// "1024x1024" or "?" when the image could not be read.
+std::string sizeText(const TexturePage& page) {
+  if (page.width <= 0) return "?";
+  return std::to_string(page.width) + "x" + std::to_string(page.height);
+}
+
+/// Prints the pages of each slot; returns true if there is a problem to warn about.
+bool printPages(const std::vector<SlotPages>& slots) {
+  bool problems = false;
+  for (const SlotPages& s : slots) {
+    if (s.layout.pages.size() > 1 || s.layout.udim) {
+      std::cout << "  " << s.slot << " pages " << s.layout.pages.size()
+                << (s.layout.udim ? " (UDIM tiles)" : " (one per image)") << "\n";
+      for (const TexturePage& page : s.layout.pages)
+        std::cout << "    page " << page.name << ": "
+                  << (page.path.empty() ? std::string("embedded") : page.path.string()) << ", "
+                  << sizeText(page) << ", " << page.faces
+                  << (page.faces == 1 ? " face\n" : " faces\n");
+    }
+    for (const std::string& problem : s.problems) std::cout << "  warning " << problem << "\n";
+    problems = problems || !s.problems.empty();
+  }
+  return problems;
+}
+
+/// The pages as JSON: {"baseColor": {"udim": true, "pages": [{name, file, width, height,
+/// faces}], "problems": [...]}}.
+nlohmann::json pagesJson(const std::vector<SlotPages>& slots) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const SlotPages& s : slots) {
+    nlohmann::json pages = nlohmann::json::array();
+    for (const TexturePage& page : s.layout.pages)
+      pages.push_back({{"name", page.name},
+                       {"file", page.path.empty() ? nlohmann::json(nullptr)
+                                                  : nlohmann::json(page.path.string())},
+                       {"width", page.width},
+                       {"height", page.height},
+                       {"faces", page.faces}});
+    j[s.slot] = {{"udim", s.layout.udim}, {"pages", pages}, {"problems", s.problems}};
+  }
+  return j;
+}
+
+/// Prints the textures, their pages and missing files; returns true if there is anything to warn
+/// about.
+bool printTextures(const TexturedMesh& mesh, const std::vector<SlotPages>& pages) {
   for (const TextureRef& t : mesh.textures)
     std::cout << "  " << t.slot
               << " texture: " << (t.path.empty() ? std::string("embedded") : t.path.string())
@@ -51,21 +126,18 @@ bool printTextures(const TexturedMesh& mesh) {
               << (t.faces == 1 ? " face\n" : " faces\n");
   bool missingImage = false;
   for (const TextureRef& t : mesh.textures)
-    if (!t.path.empty() && !pathExists(t.path)) {
+    if (!t.path.empty() && !hasUdimToken(t.path) && !pathExists(t.path)) {  // tiles: pages
       std::cout << "  warning the " << t.slot << " image " << t.path.string() << " (" << t.origin
                 << ") was not found\n";
       missingImage = true;
     }
   for (const std::string& missing : mesh.missingFiles) std::cout << "  warning " << missing << "\n";
-  const std::vector<std::string> slots = multiPageSlots(mesh);
-  for (const std::string& slot : slots)
-    std::cout << "  warning the faces use several different " << slot
-              << " textures; commands that process it refuse the mesh (one texture page only)\n";
-  return missingImage || !mesh.missingFiles.empty() || !slots.empty();
+  const bool pageProblems = printPages(pages);
+  return missingImage || !mesh.missingFiles.empty() || pageProblems;
 }
 
 void printText(const std::string& name, const AtlasReport& r, const TexturedMesh& mesh,
-               int maxIds) {
+               const std::vector<SlotPages>& pages, int maxIds) {
   std::cout << name << "\n"
             << "  vertices " << r.vertices << ", uv vertices " << r.uvVertices << ", faces "
             << r.faces << ", surface components " << r.connectedComponents << "\n"
@@ -83,7 +155,7 @@ void printText(const std::string& name, const AtlasReport& r, const TexturedMesh
               << ", texels meeting two charts: " << t.multiChartTexels
               << ", active texels outside the image: " << t.texelsOutsideImage << "\n";
   }
-  const bool textureWarnings = printTextures(mesh);
+  const bool textureWarnings = printTextures(mesh, pages);
   if (r.issues.empty() && !textureWarnings) std::cout << "  no problems found\n";
   for (const AtlasIssue& issue : r.issues) {
     std::cout << "  " << (issue.blocking ? "ERROR " : "warning ") << issue.kind << " ("
@@ -98,7 +170,7 @@ void runInfo(const InfoArgs& args) {
   const Atlas atlas = buildAtlas(mesh);
   std::optional<TexelGrid> grid;
   std::string resolution = args.resolution;
-  if (resolution.empty() && !args.texture.empty()) {
+  if (resolution.empty() && !args.texture.empty() && !hasUdimToken(args.texture)) {
     const Image texture = readImage(args.texture);
     resolution = std::to_string(texture.width) + "x" + std::to_string(texture.height);
   }
@@ -106,11 +178,14 @@ void runInfo(const InfoArgs& args) {
     const auto [w, h] = parseResolution(resolution);
     grid = buildTexelGrid(mesh, atlas, w, h);
   }
+  const std::vector<SlotPages> pages = findPages(mesh, args.texture);
   const AtlasReport report = analyzeAtlas(mesh, atlas, grid ? &*grid : nullptr);
   if (args.json) {
-    std::cout << atlasReportJson(report, mesh, args.mesh) << "\n";
+    nlohmann::json j = nlohmann::json::parse(atlasReportJson(report, mesh, args.mesh));
+    j["pages"] = pagesJson(pages);
+    std::cout << j.dump(2) << "\n";
   } else {
-    printText(args.mesh, report, mesh, args.maxIds);
+    printText(args.mesh, report, mesh, pages, args.maxIds);
   }
 }
 
@@ -130,7 +205,8 @@ void addInfoCommand(CLI::App& app) {
                   "else no texel statistics")
       ->check(resolutionValidator());
   cmd->add_option("--texture,-t", args->texture,
-                  "Texture whose size sets the resolution when --resolution is not given");
+                  "Texture whose size sets the resolution when --resolution is not given; "
+                  "with a UDIM token (<UDIM> or %04d) its tiles are listed as pages instead");
   cmd->add_flag("--json", args->json, "Print the report as JSON on stdout (default: text)");
   addMeshReadOptions(cmd, args->read);
   addWrapOption(cmd, args->wrap);

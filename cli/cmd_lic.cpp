@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "cli_common.h"
+#include "cli_pages.h"
 #include "commands.h"
 #include "texgrad/apps/dilate.h"
 #include "texgrad/apps/lic.h"
@@ -40,7 +41,7 @@ FaceVectorField loadField(const LicArgs& args, TexturedMesh& mesh) {
   FaceVectorField field =
       extrinsicField(mesh, readFaceVectorField(args.field, basis, mesh.faceCount()));
   std::vector<int32_t> parentFace;
-  mesh = wrapMesh(std::move(mesh), args.wrap, "baseColor", &parentFace);
+  mesh = wrapMesh(std::move(mesh), args.wrap, "baseColor", {}, &parentFace);
   field.vectors = followParentFaces(field.vectors, parentFace);
   return field;
 }
@@ -58,18 +59,21 @@ void runLic(LicArgs args) {
   const FaceVectorField field = loadField(args, mesh);  // wraps the mesh
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
-  TexelDomain domain(std::move(mesh), width, height, {}, progress);
+  PagedTexture paged = placeOnPagesOfSize(std::move(mesh), width, height);
+  checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
+  TexelDomain domain(std::move(paged.mesh), paged.layout.width, paged.layout.height, {}, progress);
   timer.lap("operators");
   const auto fieldTexel = fieldInTexelCoordinates(domain.mesh(), domain.grid(), field);
   const LicResult result = lineIntegralConvolution(domain, fieldTexel, args.options, progress);
   timer.lap("solve");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
   const PixelFormat stored = runStage(progress, "write", [&] {
-    return writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth,
-                              args.report.quiet);
+    return writePagedTexture(args.out, domain.mesh(), paged.layout, padded, "baseColor",
+                             args.bitDepth, args.report.quiet);
   });
   timer.lap("write");
-  printWritten(args.report.quiet, args.out, padded, stored, domain.unknowns(), timer.total());
+  printWrittenPages(args.report.quiet, args.out, paged.layout, padded, stored, domain.unknowns(),
+                    timer.total());
   const bool sharpened = args.options.sharpenBeta != 1.0;
   if (!result.report.diffusion.converged || (sharpened && !result.report.sharpening.converged))
     std::cerr << "texgrad: warning: an LIC solve stopped before reaching its tolerance "
@@ -109,7 +113,8 @@ void addLicCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--out,-o", args->out,
                   "Output image (.png .jpg .exr .tif), or .gltf/.glb for a copy of a glTF asset "
-                  "with the LIC texture as base colour")
+                  "with the LIC texture as base colour" +
+                      std::string(kPagedOutputHelp))
       ->required();
   auto* field = cmd->add_option(
       "--field", args->field,

@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "cli_common.h"
+#include "cli_pages.h"
 #include "commands.h"
 #include "photo_args.h"
 #include "texgrad/core/error.h"
@@ -40,6 +41,7 @@ void runProject(const ProjectArgs& args) {
   TexturedMesh mesh = runStage(progress, "read", [&] {
     return wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
   });
+  requireOnePageMesh(mesh, "project");
   timer.lap("read");
   // Projection reads the basis and S only (surface points, normals): no re-assembly.
   TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(), progress);

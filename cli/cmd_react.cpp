@@ -3,6 +3,7 @@
 #include <string>
 
 #include "cli_common.h"
+#include "cli_pages.h"
 #include "commands.h"
 #include "texgrad/apps/dilate.h"
 #include "texgrad/apps/reaction_diffusion.h"
@@ -54,18 +55,21 @@ void runReact(ReactArgs args) {
   TexturedMesh mesh = wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), width, height, OperatorOptions::assembledOnce(),
-                           progress);
+  PagedTexture paged = placeOnPagesOfSize(std::move(mesh), width, height);
+  checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
+  const TexelDomain domain(std::move(paged.mesh), paged.layout.width, paged.layout.height,
+                           OperatorOptions::assembledOnce(), progress);
   timer.lap("operators");
   const ReactionResult result = reactionDiffusion(domain, args.options, args.steps, progress);
   timer.lap("steps");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
   const PixelFormat stored = runStage(progress, "write", [&] {
-    return writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth,
-                              args.report.quiet);
+    return writePagedTexture(args.out, domain.mesh(), paged.layout, padded, "baseColor",
+                             args.bitDepth, args.report.quiet);
   });
   timer.lap("write");
-  printWritten(args.report.quiet, args.out, padded, stored, domain.unknowns(), timer.total());
+  printWrittenPages(args.report.quiet, args.out, paged.layout, padded, stored, domain.unknowns(),
+                    timer.total());
   if (args.report.timings) timer.print();
   if (args.report.json)
     printJson({{"command", "react"},
@@ -98,7 +102,8 @@ void addReactCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--out,-o", args->out,
                   "Output image (.png .jpg .exr .tif), or .gltf/.glb for a copy of a glTF asset "
-                  "with the pattern as base colour")
+                  "with the pattern as base colour" +
+                      std::string(kPagedOutputHelp))
       ->required();
   cmd->add_option("--preset", args->preset,
                   "stripes (F = 0.050, k = 0.065) or dots (F = 0.030, k = 0.062), Pearson's "

@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "cli_common.h"
+#include "cli_pages.h"
 #include "commands.h"
 #include "texgrad/apps/seams.h"
 #include "texgrad/atlas/seam_jump.h"
@@ -23,12 +24,16 @@ void runSeams(const SeamsArgs& args) {
   checkTextureOutputArgs(args.out, args.mesh, args.bitDepth);
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
-  TexturedMesh mesh = wrapMesh(loadMesh(args.mesh, args.read), args.wrap, args.slot);
-  const Image texture = loadTexture(mesh, args.mesh, args.texture, args.slot);
+  PagedTexture paged =
+      loadPagedTexture(wrapMesh(loadMesh(args.mesh, args.read), args.wrap, args.slot, args.texture),
+                       args.mesh, args.texture, args.slot);
+  checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
+  if (!args.mask.empty()) requireSinglePage(paged.layout, "--mask", "leave it out");
+  const Image& texture = paged.image;
   const Image mask = args.mask.empty() ? Image() : readImage(args.mask);
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), texture.width, texture.height,
+  const TexelDomain domain(std::move(paged.mesh), texture.width, texture.height,
                            OperatorOptions::assembledOnce(), progress);
   timer.lap("operators");
   const SeamsResult result = smoothSeams(domain, texture, mask, args.options, progress);
@@ -38,11 +43,12 @@ void runSeams(const SeamsArgs& args) {
               << " texels kept as they are: no fixed texel ties them to the rest (charts too "
                  "thin for an interior texel at this resolution, or a mask over whole charts)\n";
   const PixelFormat stored = runStage(progress, "write", [&] {
-    return writeTextureOutput(args.out, domain.mesh(), result.image, args.slot, args.bitDepth,
-                              args.report.quiet);
+    return writePagedTexture(args.out, domain.mesh(), paged.layout, result.image, args.slot,
+                             args.bitDepth, args.report.quiet);
   });
   timer.lap("write");
-  printWritten(args.report.quiet, args.out, result.image, stored, domain.unknowns(), timer.total());
+  printWrittenPages(args.report.quiet, args.out, paged.layout, result.image, stored,
+                    domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();
   if (args.report.json) {
     const SeamJump before = measureSeamJump(domain.mesh(), domain.atlas(), texture);
@@ -74,8 +80,12 @@ void addSeamsCommand(CLI::App& app) {
       "bit.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
-  cmd->add_option("texture", args->texture, "Texture (default: the mesh's --texture-slot texture)");
-  cmd->add_option("--out,-o", args->out, "Output image, or .gltf/.glb for a glTF copy")->required();
+  cmd->add_option(
+      "texture", args->texture,
+      std::string("Texture (default: the mesh's --texture-slot texture)") + kPagedInputHelp);
+  cmd->add_option("--out,-o", args->out,
+                  std::string("Output image, or .gltf/.glb for a glTF copy") + kPagedOutputHelp)
+      ->required();
   cmd->add_option("--mask", args->mask,
                   "Re-solve the active texels under this mask (white) instead of the chart "
                   "boundary texels");

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "cli_common.h"
+#include "cli_pages.h"
 #include "commands.h"
 #include "texgrad/apps/stitch.h"
 #include "texgrad/core/error.h"
@@ -66,6 +67,7 @@ void runStitch(StitchArgs args) {
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
   TexturedMesh mesh = wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
+  requireOnePageMesh(mesh, "stitch");
   Image composite, segments;
   std::vector<Image> partials, confidences;
   if (compositeMode) {

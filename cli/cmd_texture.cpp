@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "cli_common.h"
+#include "cli_pages.h"
 #include "commands.h"
 #include "photo_args.h"
 #include "texgrad/apps/dilate.h"
@@ -36,6 +37,7 @@ void runTexture(TextureArgs args) {
   TexturedMesh mesh = runStage(progress, "read", [&] {
     return wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
   });
+  requireOnePageMesh(mesh, "texture");
   timer.lap("read");
   TexelDomain domain(std::move(mesh), width, height, {}, progress);
   timer.lap("operators");

@@ -14,8 +14,25 @@
 namespace texgrad::fem {
 namespace {
 
-/// Seam parameters closer than this are one point (a few ulps of parameters in [0, 1]).
+/// Seam parameters closer than this are one point (a few ulps of parameters in [0, 1]), for an
+/// edge whose lattice coordinates are no larger than its length.
 constexpr double kSameParameter = 64.0 * std::numeric_limits<double>::epsilon();
+
+/// kSameParameter for the two sides of a seam: a crossing's parameter (line - from) / (to - from)
+/// carries the rounding of the coordinates, about epsilon times their magnitude over the edge's
+/// length, so an edge far from the lattice origin (a large image, a texture page at a large
+/// column offset) gets a proportionally wider tolerance.
+double sameParameterTolerance(const std::array<Eigen::Vector2d, 2>& from,
+                              const std::array<Eigen::Vector2d, 2>& to) {
+  double scale = 1.0;
+  for (int s = 0; s < 2; ++s) {
+    const double length = (to[s] - from[s]).lpNorm<Eigen::Infinity>();
+    const double magnitude =
+        std::max(from[s].lpNorm<Eigen::Infinity>(), to[s].lpNorm<Eigen::Infinity>());
+    if (length > 0.0) scale = std::max(scale, magnitude / length);
+  }
+  return kSameParameter * scale;
+}
 
 }  // namespace
 
@@ -83,20 +100,21 @@ void TexelBasis::buildSeams(const Atlas& atlas) {
       own[s] = latticeCrossings(from[s], to[s]);
     }
     // Merge both sides' crossings into one parameter sequence along side a (paper Sec. 4.1).
+    const double sameParameter = sameParameterTolerance(from, to);
     const bool same = pair.sameDirection;
     std::vector<std::tuple<double, int, int>> merged;  // (t along a, index in own[0], own[1])
     const size_t nb = own[1].size();
     size_t i = 0, j = 0;
     auto bIndex = [&](size_t k) { return same ? k : nb - 1 - k; };
     auto bParam = [&](size_t k) { return same ? own[1][bIndex(k)].t : 1.0 - own[1][bIndex(k)].t; };
-    // Crossings within kSameParameter are one event (e.g. both sides crossing the same lattice
+    // Crossings within sameParameter are one event (e.g. both sides crossing the same lattice
     // line at the same parameter up to rounding): two events there would give zero-length
     // polygon edges and degenerate fan elements.
     while (i < own[0].size() || j < nb) {
-      if (j == nb || (i < own[0].size() && own[0][i].t < bParam(j) - kSameParameter)) {
+      if (j == nb || (i < own[0].size() && own[0][i].t < bParam(j) - sameParameter)) {
         merged.emplace_back(own[0][i].t, static_cast<int>(i), -1);
         ++i;
-      } else if (i == own[0].size() || bParam(j) < own[0][i].t - kSameParameter) {
+      } else if (i == own[0].size() || bParam(j) < own[0][i].t - sameParameter) {
         merged.emplace_back(bParam(j), -1, static_cast<int>(bIndex(j)));
         ++j;
       } else {

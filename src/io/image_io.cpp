@@ -412,6 +412,19 @@ Image readImage(const std::filesystem::path& path) {
   return image;
 }
 
+std::pair<int, int> readImageSize(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw IoError("cannot open " + name + ": No such file");
+  const OIIO::ImageSpec config = readerConfig();
+  auto input = OIIO::ImageInput::open(name, &config);
+  if (!input) throw InvalidInputError("cannot read " + name + ": " + oneLine(OIIO::geterror()));
+  const std::pair<int, int> size{input->spec().width, input->spec().height};
+  input->close();
+  return size;
+}
+
 Image readImageFromMemory(const std::vector<unsigned char>& bytes, const std::string& name) {
   const FileKind kind = kindOfContent(bytes);
   if (kind == FileKind::Unknown)

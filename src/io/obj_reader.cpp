@@ -42,8 +42,9 @@ bool sameImage(const TextureRef& a, const TextureRef& b) {
   return a.path == b.path && a.embedded == b.embedded;
 }
 
-/// Adds the slot textures of the materials faces use, each distinct image once (several mean
-/// several texture pages: readMeshTexture refuses them); unused materials only fill empty slots.
+/// Adds the slot textures of the materials faces use, each distinct image once with the
+/// materials using it (several images are several texture pages: texture_pages.h); unused
+/// materials only fill empty slots.
 void addTextures(TexturedMesh& mesh, const std::filesystem::path& path,
                  const std::vector<tinyobj::shape_t>& shapes,
                  const std::vector<tinyobj::material_t>& materials) {
@@ -57,26 +58,41 @@ void addTextures(TexturedMesh& mesh, const std::filesystem::path& path,
         faces[static_cast<size_t>(id)] += corners - 2;
     }
   const auto addSlot = [&](const char* slot, const char* keyword, const std::string& name,
-                           const tinyobj::material_t& m, size_t materialFaces) {
-    if (name.empty() || (materialFaces == 0 && mesh.texture(slot) != nullptr)) return;
+                           const tinyobj::texture_option_t& options, const tinyobj::material_t& m,
+                           size_t id, size_t materialFaces) {
+    if (name.empty()) return;
     TextureRef ref;
     ref.slot = slot;
     ref.path = resolveTexture(path, name);
     ref.origin = "material '" + m.name + "' (" + keyword + " '" + name + "')";
     ref.faces = materialFaces;
+    ref.materials = {static_cast<int32_t>(id)};
+    // `-clamp on`: the edge texels extend (MTL's only wrap option; it applies to both axes).
+    const TextureWrap wrap = options.clamp ? TextureWrap::ClampToEdge : TextureWrap::Repeat;
+    ref.wrapU = ref.wrapV = wrap;
     for (TextureRef& t : mesh.textures)
       if (t.slot == ref.slot && sameImage(t, ref)) {
         t.faces += materialFaces;
+        t.materials.push_back(ref.materials.front());
         return;
       }
+    if (materialFaces == 0 && mesh.texture(slot) != nullptr) return;
     mesh.textures.push_back(std::move(ref));
   };
   for (size_t id : materialOrder(shapes, materials.size())) {
     const tinyobj::material_t& m = materials[id];
-    addSlot("baseColor", "map_Kd", m.diffuse_texname, m, faces[id]);
-    addSlot("normal", "norm", m.normal_texname, m, faces[id]);
-    if (m.normal_texname.empty()) addSlot("normal", "bump", m.bump_texname, m, faces[id]);
+    addSlot("baseColor", "map_Kd", m.diffuse_texname, m.diffuse_texopt, m, id, faces[id]);
+    addSlot("normal", "norm", m.normal_texname, m.normal_texopt, m, id, faces[id]);
+    if (m.normal_texname.empty())
+      addSlot("normal", "bump", m.bump_texname, m.bump_texopt, m, id, faces[id]);
   }
+}
+
+/// The material of polygon `f` of `shape` (an index into the file's materials), -1 if none.
+int32_t materialOf(const tinyobj::shape_t& shape, size_t f, size_t materialCount) {
+  if (f >= shape.mesh.material_ids.size()) return -1;
+  const int id = shape.mesh.material_ids[f];
+  return id >= 0 && static_cast<size_t>(id) < materialCount ? static_cast<int32_t>(id) : -1;
 }
 
 /// Checks one face corner and returns its (vertex, uv) indices.
@@ -138,8 +154,11 @@ TexturedMesh readObj(const std::filesystem::path& path) {
 
   size_t face = 0;
   std::vector<std::pair<int32_t, int32_t>> corners;
+  const size_t materialCount = reader.GetMaterials().size();
+  for (const tinyobj::material_t& m : reader.GetMaterials()) mesh.materials.push_back(m.name);
   for (const tinyobj::shape_t& shape : reader.GetShapes()) {
     size_t offset = 0;
+    const size_t firstFace = face;
     for (unsigned char n : shape.mesh.num_face_vertices) {
       // The line scan refused faces with fewer than 3 corners, so tinyobjloader dropped none
       // and faces map one-to-one onto 'f' lines.
@@ -151,9 +170,11 @@ TexturedMesh readObj(const std::filesystem::path& path) {
       for (size_t k = 0; k < n; ++k)
         corners.push_back(
             corner(shape.mesh.indices[offset + k], line, k, vertexCount, uvCount, path));
+      const int32_t material = materialOf(shape, face - firstFace, materialCount);
       for (size_t k = 1; k + 1 < n; ++k) {
         mesh.triangles.push_back({corners[0].first, corners[k].first, corners[k + 1].first});
         mesh.uvTriangles.push_back({corners[0].second, corners[k].second, corners[k + 1].second});
+        if (materialCount > 0) mesh.faceMaterial.push_back(material);
       }
       offset += n;
       ++face;

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <optional>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "texgrad/io/image.h"
@@ -13,6 +14,10 @@ namespace texgrad {
 /// Reads an image file into texel order (row 0 = bottom). Checks that the file's content matches
 /// its extension; throws IoError / InvalidInputError naming the file on any problem.
 Image readImage(const std::filesystem::path& path);
+
+/// The width and height of an image file, read from its header (no pixels are decoded); throws
+/// IoError if it is missing, InvalidInputError if OpenImageIO cannot open it.
+std::pair<int, int> readImageSize(const std::filesystem::path& path);
 
 /// Decodes an image held in memory (e.g. embedded in a GLB); `name` is used in messages.
 Image readImageFromMemory(const std::vector<unsigned char>& bytes, const std::string& name);

@@ -1,0 +1,74 @@
+// The `texgrad` subcommands' side of texture pages (texgrad/io/texture_pages.h): reading a
+// texture over its pages, placing the mesh on their layout, and writing one image per page.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "texgrad/io/image.h"
+#include "texgrad/io/texture_pages.h"
+#include "texgrad/io/textured_mesh.h"
+
+namespace texgrad::cli {
+
+/// What --out does for a texture over several pages, appended to each --out help.
+inline constexpr const char* kPagedOutputHelp =
+    ". A texture over several pages (UDIM tiles, or one image per material) gives one image per "
+    "page: a <UDIM> or %04d in the name is replaced by the tile number, else the page name goes "
+    "before the extension (out.png -> out.1001.png or out.MATERIAL.png)";
+
+/// What the TEXTURE argument accepts, appended to its help.
+inline constexpr const char* kPagedInputHelp =
+    "; a name with <UDIM> or %04d (tex.<UDIM>.png) reads one image per UDIM tile the UVs use";
+
+/// A mesh placed on the pages of its texture, and the layout image when one was read.
+struct PagedTexture {
+  TexturedMesh mesh;  ///< UVs in the layout's UV space (the mesh itself for one page)
+  PageLayout layout;  ///< the pages, arranged
+  Image image;        ///< the texture's layout image (empty when only sizes were set)
+};
+
+/// loadTexture over pages: the pages of `slot` (or of `explicitPath`, which may hold a UDIM token)
+/// read into one layout image, and `mesh` placed on it. One page is read exactly as loadTexture
+/// reads it.
+PagedTexture loadPagedTexture(TexturedMesh mesh, const std::string& meshSpec,
+                              const std::string& explicitPath, const std::string& slot);
+
+/// The mesh's base-colour pages, each `width` x `height` (a texture the command makes: lic,
+/// react, geodesic), and `mesh` placed on them; no image is read.
+PagedTexture placeOnPagesOfSize(TexturedMesh mesh, int width, int height);
+
+/// The mesh's base-colour pages with the sizes of their images (headers only), and `mesh` placed
+/// on them; nullopt if the texture is one page (the caller keeps its own choice of size).
+std::optional<PagedTexture> placeOnPagesOfImages(const TexturedMesh& mesh);
+
+/// Refuses, naming `option` and saying what to do `instead`, an option not supported yet when
+/// the texture has several pages.
+void requireSinglePage(const PageLayout& layout, const std::string& option,
+                       const std::string& instead);
+
+/// Refuses, naming `command`, a mesh whose base-colour texture has several pages, for the
+/// commands that do not place meshes on pages yet (their UVs would overlap in one image).
+void requireOnePageMesh(const TexturedMesh& mesh, const std::string& command);
+
+/// Checks, before the work, that every page of `out` can be written: checkImageOutput for each
+/// page's file; a glTF output of several pages is refused (one line).
+void checkPagedOutputArgs(const std::string& out, const PageLayout& layout,
+                          const std::string& bitDepth);
+
+/// Writes the layout image `image`: writeTextureOutput for one page, else each page to its
+/// pageOutputPath. Returns the pixel format stored.
+PixelFormat writePagedTexture(const std::string& out, const TexturedMesh& mesh,
+                              const PageLayout& layout, const Image& image, const std::string& slot,
+                              const std::string& bitDepth, bool quiet);
+
+/// The same for an output that is always an image file (writeImage in `format`).
+PixelFormat writePagedImage(const std::string& out, const PageLayout& layout, const Image& image,
+                            PixelFormat format);
+
+/// printWritten for a paged output: one line naming every page file written.
+void printWrittenPages(bool quiet, const std::string& out, const PageLayout& layout,
+                       const Image& image, PixelFormat stored, int64_t texels, double seconds);
+
+}  // namespace texgrad::cli

@@ -1,0 +1,206 @@
+// Texture pages through the CLI: a mesh re-exported with two materials (half the charts each,
+// the same image twice) filters to what the one-texture original gives, one image per page;
+// UDIM tiles by the TEXTURE argument's token; `info` lists the pages; a missing page is named.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "cli_runner.h"
+#include "test_paths.h"
+#include "texgrad/atlas/atlas.h"
+#include "texgrad/io/image_io.h"
+#include "texgrad/io/mesh_reader.h"
+#include "texgrad/io/procedural.h"
+
+namespace texgrad::test {
+namespace {
+
+/// Float outputs of the two runs agree to this (they solve the same system).
+constexpr double kPagesCliTolerance = 1e-6;
+
+/// Writes `mesh` as an OBJ whose face f uses material `names[material(f)]`, each material's
+/// map_Kd the matching entry of `images` (one material and image: the plain original).
+void writeObjWithMaterials(const std::filesystem::path& obj, const TexturedMesh& mesh,
+                           const std::vector<int>& faceMaterial,
+                           const std::vector<std::string>& images) {
+  std::ofstream mtl(obj.parent_path() / (obj.stem().string() + ".mtl"));
+  for (size_t m = 0; m < images.size(); ++m)
+    mtl << "newmtl m" << m << "\nmap_Kd " << images[m] << "\n";
+  std::ofstream out(obj);
+  out.precision(17);
+  out << "mtllib " << obj.stem().string() << ".mtl\n";
+  for (const Eigen::Vector3d& p : mesh.positions)
+    out << "v " << p.x() << " " << p.y() << " " << p.z() << "\n";
+  for (const Eigen::Vector2d& uv : mesh.uvs) out << "vt " << uv.x() << " " << uv.y() << "\n";
+  int current = -1;
+  for (size_t f = 0; f < mesh.faceCount(); ++f) {
+    if (faceMaterial[f] != current) out << "usemtl m" << (current = faceMaterial[f]) << "\n";
+    out << "f";
+    for (int k = 0; k < 3; ++k)
+      out << " " << mesh.triangles[f][k] + 1 << "/" << mesh.uvTriangles[f][k] + 1;
+    out << "\n";
+  }
+}
+
+/// Per face: 0 for the first half of the charts, 1 for the others.
+std::vector<int> halfTheCharts(const TexturedMesh& mesh) {
+  const Atlas atlas = buildAtlas(mesh);
+  const auto half = static_cast<int32_t>(atlas.charts.size() / 2);
+  std::vector<int> material(mesh.faceCount());
+  for (size_t f = 0; f < mesh.faceCount(); ++f) material[f] = atlas.chartOfFace[f] < half ? 0 : 1;
+  return material;
+}
+
+/// Filters `mesh` (texture `texture`) once as one texture and once as two materials using the
+/// same image, and checks that every texel of the original's output is on one of the pages.
+void expectTwoMaterialsFilterLikeOne(const TexturedMesh& mesh, const Image& texture,
+                                     const std::string& name) {
+  const auto dir = tempDir(name);
+  writeImage(dir / "t.png", texture, PixelFormat::UInt8);
+  writeObjWithMaterials(dir / "one.obj", mesh, std::vector<int>(mesh.faceCount(), 0), {"t.png"});
+  std::filesystem::copy_file(dir / "t.png", dir / "u.png");
+  writeObjWithMaterials(dir / "two.obj", mesh, halfTheCharts(mesh), {"t.png", "u.png"});
+  const std::vector<std::string> options{"--beta",      "0.3",   "--solver", "direct",
+                                         "--bit-depth", "float", "-q"};
+  std::vector<std::string> one{"filter", "one.obj", "--out", "one.exr"}, two = one;
+  two[1] = "two.obj";
+  two[3] = "two.exr";
+  one.insert(one.end(), options.begin(), options.end());
+  two.insert(two.end(), options.begin(), options.end());
+  const CliResult a = runCli(one, dir), b = runCli(two, dir);
+  ASSERT_EQ(a.status, 0) << a.err;
+  ASSERT_EQ(b.status, 0) << b.err;
+  const Image single = readImage(dir / "one.exr"), input = readImage(dir / "t.png");
+  const Image m0 = readImage(dir / "two.m0.exr"), m1 = readImage(dir / "two.m1.exr");
+  ASSERT_EQ(m0.width, single.width);
+  ASSERT_EQ(m1.height, single.height);
+  // Each page changes the texels of its charts and keeps the others; together they are the
+  // original's output.
+  size_t changed0 = 0, changed1 = 0;
+  double worst = 0.0;
+  for (size_t k = 0; k < single.pixels.size(); ++k) {
+    const bool on0 = m0.pixels[k] != input.pixels[k], on1 = m1.pixels[k] != input.pixels[k];
+    changed0 += on0;
+    changed1 += on1;
+    const float merged = on0 ? m0.pixels[k] : m1.pixels[k];
+    worst = std::max(worst, std::abs(double(merged) - single.pixels[k]));
+  }
+  EXPECT_GT(changed0, 100u);
+  EXPECT_GT(changed1, 100u);
+  EXPECT_LT(worst, kPagesCliTolerance);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(CliPages, TwoMaterialsFilterLikeOneTexture) {
+  // Every chart moved 0.07 left: the atlas' left column reaches 4.8 texels past the image's
+  // left side, on each page (the layout widens the gap before the second page to hold that).
+  TexturedMesh mesh = procedural::cubeSphere(8);
+  for (Eigen::Vector2d& uv : mesh.uvs) uv.x() -= 0.07;
+  expectTwoMaterialsFilterLikeOne(mesh, procedural::sampleTexture(120, 120), "cli_pages_two");
+}
+
+TEST(CliPagesSlow, SharedMeshWithTwoMaterialsFiltersLikeTheOriginal) {
+  const auto obj = sharedData() / "spot/spot_triangulated.obj";
+  if (!std::filesystem::exists(obj)) GTEST_SKIP() << "no shared data at " << obj;
+  Image texture = readImage(sharedData() / "spot/spot_texture.png");
+  expectTwoMaterialsFilterLikeOne(readMesh(obj), texture, "cli_pages_spot");
+}
+
+/// cubeSphere(4) with chart c moved to UDIM tile 1001 + (c % 2) + 10 ((c / 2) % 2).
+TexturedMesh tiledSphere() {
+  TexturedMesh mesh = procedural::cubeSphere(4);
+  const Atlas atlas = buildAtlas(mesh);
+  std::vector<bool> moved(mesh.uvs.size(), false);
+  for (size_t f = 0; f < mesh.faceCount(); ++f)
+    for (int32_t t : mesh.uvTriangles[f]) {
+      if (moved[static_cast<size_t>(t)]) continue;
+      moved[static_cast<size_t>(t)] = true;
+      const int c = atlas.chartOfFace[f];
+      mesh.uvs[static_cast<size_t>(t)] += Eigen::Vector2d(c % 2, (c / 2) % 2);
+    }
+  return mesh;
+}
+
+TEST(CliPages, UdimTilesAreListedProcessedAndAMissingTileNamed) {
+  const auto dir = tempDir("cli_pages_udim");
+  writeObjWithMaterials(dir / "tiles.obj", tiledSphere(),
+                        std::vector<int>(tiledSphere().faceCount(), 0), {"t.<UDIM>.png"});
+  for (const char* tile : {"1001", "1002", "1011"})
+    writeImage(dir / ("t." + std::string(tile) + ".png"), procedural::sampleTexture(64, 64));
+
+  const CliResult missing = runCli({"filter", "tiles.obj", "--out", "f.png", "-q"}, dir);
+  EXPECT_EQ(missing.status, 1);
+  EXPECT_EQ(lineCount(missing.err), 1) << missing.err;
+  EXPECT_NE(missing.err.find("t.1012.png was not found"), std::string::npos) << missing.err;
+  EXPECT_NE(missing.err.find("UDIM tile 1012"), std::string::npos) << missing.err;
+  const CliResult infoMissing = runCli({"info", "tiles.obj"}, dir);
+  EXPECT_NE(infoMissing.out.find("t.1012.png was not found"), std::string::npos) << infoMissing.out;
+
+  writeImage(dir / "t.1012.png", procedural::sampleTexture(64, 64));
+  const CliResult info = runCli({"info", "tiles.obj", "--json"}, dir);
+  ASSERT_EQ(info.status, 0) << info.err;
+  const auto pages = nlohmann::json::parse(info.out)["pages"]["baseColor"];
+  EXPECT_TRUE(pages["udim"].get<bool>());
+  ASSERT_EQ(pages["pages"].size(), 4u);
+  EXPECT_EQ(pages["pages"][3]["name"], "1012");
+  EXPECT_EQ(pages["pages"][3]["width"], 64);
+  EXPECT_GT(pages["pages"][3]["faces"].get<int>(), 0);
+  const CliResult text = runCli({"info", "tiles.obj"}, dir);
+  EXPECT_NE(text.out.find("baseColor pages 4 (UDIM tiles)"), std::string::npos) << text.out;
+
+  const CliResult filter =
+      runCli({"filter", "tiles.obj", "--out", "out.<UDIM>.png", "--beta", "0.3", "-q"}, dir);
+  ASSERT_EQ(filter.status, 0) << filter.err;
+  for (const char* tile : {"1001", "1002", "1011", "1012"})
+    EXPECT_EQ(readImage(dir / ("out." + std::string(tile) + ".png")).width, 64) << tile;
+  // Every command that makes or reads the texture writes one image per tile.
+  const std::vector<std::vector<std::string>> commands{
+      {"dilate", "tiles.obj", "--out", "d.<UDIM>.png"},
+      {"seams", "tiles.obj", "--out", "s.<UDIM>.png"},
+      {"geodesic", "tiles.obj", "--source-vertex", "0", "--out", "g.<UDIM>.exr"},
+      {"lic", "tiles.obj", "-r", "64", "--out", "l.<UDIM>.png"},
+      {"react", "tiles.obj", "-r", "64", "--steps", "20", "--out", "r.<UDIM>.png"}};
+  for (const std::vector<std::string>& command : commands) {
+    const CliResult run = runCli(command, dir);
+    ASSERT_EQ(run.status, 0) << command[0] << ": " << run.err;
+    const std::string pattern = command.back();
+    for (const char* tile : {"1001", "1002", "1011", "1012"}) {
+      std::string file = pattern;
+      file.replace(file.find("<UDIM>"), 6, tile);
+      EXPECT_EQ(readImage(dir / file).width, 64) << file;
+    }
+  }
+  const CliResult gltf = runCli({"filter", "tiles.obj", "--out", "out.glb", "-q"}, dir);
+  EXPECT_EQ(gltf.status, 1);
+  EXPECT_EQ(lineCount(gltf.err), 1) << gltf.err;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(CliPages, InfoListsMaterialPages) {
+  const auto dir = tempDir("cli_pages_info");
+  const TexturedMesh mesh = procedural::cubeSphere(4);
+  writeObjWithMaterials(dir / "two.obj", mesh, halfTheCharts(mesh), {"a.png", "b.png"});
+  writeImage(dir / "a.png", procedural::sampleTexture(32, 16));
+  const CliResult missing = runCli({"info", "two.obj"}, dir);
+  EXPECT_NE(missing.out.find("b.png was not found: it is page 'm1'"), std::string::npos)
+      << missing.out;
+  writeImage(dir / "b.png", procedural::sampleTexture(48, 16));
+  const CliResult info = runCli({"info", "two.obj"}, dir);
+  ASSERT_EQ(info.status, 0) << info.err;
+  EXPECT_NE(info.out.find("baseColor pages 2 (one per image)"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("page m0: " + (dir / "a.png").string() + ", 32x16, "), std::string::npos)
+      << info.out;
+  EXPECT_NE(info.out.find("page m1: " + (dir / "b.png").string() + ", 48x16, "), std::string::npos)
+      << info.out;
+  // A command that does not place meshes on pages yet refuses, rather than overlap the pages.
+  const CliResult stitch = runCli(
+      {"stitch", "two.obj", "--composite", "a.png", "--segments", "a.png", "--out", "s.png"}, dir);
+  EXPECT_EQ(stitch.status, 1);
+  EXPECT_EQ(lineCount(stitch.err), 1) << stitch.err;
+  EXPECT_NE(stitch.err.find("2 pages"), std::string::npos) << stitch.err;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace texgrad::test
