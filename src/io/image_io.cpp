@@ -19,6 +19,7 @@
 #include <string_view>
 #include <type_traits>
 
+#include "image_spec.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/atomic_file.h"
 
@@ -346,23 +347,12 @@ std::vector<T> fileOrderSamples(const Image& image) {
   return out;
 }
 
-OIIO::ImageSpec outputSpec(const Image& image, PixelFormat format) {
-  OIIO::ImageSpec spec(image.width, image.height, image.channels, typeOf(format));
-  static const std::array<std::vector<std::string>, kMaxChannels> names{
-      {{"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}}};
-  spec.channelnames = names[static_cast<size_t>(image.channels - 1)];
-  spec.alpha_channel = (image.channels == 2 || image.channels == 4) ? image.channels - 1 : -1;
-  // Colour is not premultiplied by alpha: write it as is (OIIO would divide it otherwise).
-  spec.attribute("oiio:UnassociatedAlpha", 1);
-  return spec;
-}
-
 void encode(const std::filesystem::path& temporary, const std::filesystem::path& target,
             const Image& image, PixelFormat format) {
   const std::string where = "cannot write " + target.string() + ": ";
   auto output = OIIO::ImageOutput::create(temporary.string());
   if (!output) throw IoError(where + oneLine(OIIO::geterror()));
-  if (!output->open(temporary.string(), outputSpec(image, format)))
+  if (!output->open(temporary.string(), outputSpec(image, typeOf(format))))
     throw IoError(where + oneLine(output->geterror()));
   bool ok = false;
   switch (format) {
@@ -504,6 +494,16 @@ PixelFormat parsePixelFormat(const std::string& text) {
   if (key == "half") return PixelFormat::Half;
   if (key == "float") return PixelFormat::Float;
   throw InvalidInputError("unknown pixel format '" + text + "'; use 8, 16, half or float");
+}
+
+OIIO::ImageSpec outputSpec(const Image& image, OIIO::TypeDesc type) {
+  OIIO::ImageSpec spec(image.width, image.height, image.channels, type);
+  static const std::array<std::vector<std::string>, kMaxChannels> names{
+      {{"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}}};
+  spec.channelnames = names[static_cast<size_t>(image.channels - 1)];
+  spec.alpha_channel = (image.channels == 2 || image.channels == 4) ? image.channels - 1 : -1;
+  spec.attribute("oiio:UnassociatedAlpha", 1);
+  return spec;
 }
 
 }  // namespace texgrad

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "image_spec.h"
 #include "texgrad/core/error.h"
 
 namespace texgrad::png {
@@ -18,18 +19,6 @@ namespace {
 
 /// Largest channel count a PNG holds (grey, grey + alpha, RGB, RGBA).
 constexpr int kMaxChannels = 4;
-
-/// Channel names and alpha for a 1-4 channel PNG; colour is stored unpremultiplied.
-OIIO::ImageSpec pngSpec(const Image& image, bool sixteenBit) {
-  OIIO::ImageSpec spec(image.width, image.height, image.channels,
-                       sixteenBit ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8);
-  static const std::array<std::vector<std::string>, kMaxChannels> names{
-      {{"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}}};
-  spec.channelnames = names[static_cast<size_t>(image.channels - 1)];
-  spec.alpha_channel = (image.channels == 2 || image.channels == 4) ? image.channels - 1 : -1;
-  spec.attribute("oiio:UnassociatedAlpha", 1);
-  return spec;
-}
 
 /// Texel-order floats to file-order (top row first) integer samples, clamped and rounded.
 template <typename T>
@@ -66,7 +55,8 @@ std::vector<unsigned char> encodePng(const Image& image, PixelFormat format,
   const std::string proxyName = "texgrad-memory.png";
   auto output = OIIO::ImageOutput::create(proxyName);
   if (!output) throw IoError(where + oneLine(OIIO::geterror()));
-  OIIO::ImageSpec spec = pngSpec(image, sixteenBit);
+  OIIO::ImageSpec spec =
+      outputSpec(image, sixteenBit ? OIIO::TypeDesc::UINT16 : OIIO::TypeDesc::UINT8);
   OIIO::Filesystem::IOProxy* proxyPointer = &proxy;
   spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxyPointer);
   if (!output->set_ioproxy(&proxy) || !output->open(proxyName, spec))
