@@ -166,7 +166,7 @@ void printText(const std::string& name, const AtlasReport& r, const TexturedMesh
 
 void runInfo(const InfoArgs& args) {
   const TexturedMesh mesh =
-      wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
+      wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor", args.texture);
   const Atlas atlas = buildAtlas(mesh);
   std::optional<TexelGrid> grid;
   std::string resolution = args.resolution;

@@ -202,5 +202,27 @@ TEST(CliPages, InfoListsMaterialPages) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(CliPages, UdimTilesNamedOnTheCommandLineAreListedAndProcessed) {
+  // The mesh's own texture is one image; the TEXTURE argument's UDIM token makes the tiles the
+  // pages, so the UVs must stay in their tiles (not be wrapped into the first one).
+  const auto dir = tempDir("cli_pages_udim_argument");
+  writeObjWithMaterials(dir / "tiles.obj", tiledSphere(),
+                        std::vector<int>(tiledSphere().faceCount(), 0), {"plain.png"});
+  for (const char* tile : {"1001", "1002", "1011", "1012"})
+    writeImage(dir / ("t." + std::string(tile) + ".png"), procedural::sampleTexture(64, 64));
+  const CliResult info = runCli({"info", "tiles.obj", "--texture", "t.<UDIM>.png", "--json"}, dir);
+  ASSERT_EQ(info.status, 0) << info.err;
+  const auto pages = nlohmann::json::parse(info.out)["pages"]["baseColor"];
+  EXPECT_TRUE(pages["udim"].get<bool>());
+  EXPECT_EQ(pages["pages"].size(), 4u) << info.out;
+  const CliResult filter = runCli(
+      {"filter", "tiles.obj", "t.<UDIM>.png", "--out", "out.<UDIM>.png", "--beta", "0.3", "-q"},
+      dir);
+  ASSERT_EQ(filter.status, 0) << filter.err;
+  for (const char* tile : {"1001", "1002", "1011", "1012"})
+    EXPECT_TRUE(std::filesystem::exists(dir / ("out." + std::string(tile) + ".png"))) << tile;
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace texgrad::test
