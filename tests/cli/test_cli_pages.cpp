@@ -1,7 +1,8 @@
 // Texture pages through the CLI: a mesh re-exported with two materials (half the charts each,
 // the same image twice) filters to what the one-texture original gives, one image per page;
 // UDIM tiles by the TEXTURE argument's token; `info` lists the pages; a missing page is named;
-// a chart straddling two UDIM tiles stays continuous across their border.
+// a chart straddling two UDIM tiles stays continuous across their border; `texture` from photos
+// over UDIM tiles gives, tile by tile, what it gives on the single image of the same charts.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -9,9 +10,11 @@
 #include <random>
 
 #include "cli_runner.h"
+#include "photo_scene.h"
 #include "straddling_strip.h"
 #include "test_paths.h"
 #include "texgrad/atlas/atlas.h"
+#include "texgrad/io/camera_writer.h"
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/procedural.h"
@@ -257,6 +260,54 @@ TEST(CliPages, AChartStraddlingTwoUdimTilesStaysContinuousAcrossTheirBorder) {
   const double after = jumpAcrossTileBorder(out1, out2);
   EXPECT_GT(before, 0.4);
   EXPECT_LT(after, 0.25 * before) << "before " << before << ", after " << after;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(CliPages, TextureFromPhotosOverUdimTilesMatchesTheSingleImage) {
+  const auto dir = tempDir("cli_pages_texture");
+  constexpr int kTileTexels = 128;  // the charts keep >= 3 texels from every tile border
+  const TexturedMesh tiles = tiledSphere();
+  TexturedMesh single = tiles;  // the 2 x 2 tiles as the quadrants of one image
+  for (Eigen::Vector2d& uv : single.uvs) uv /= 2.0;
+  writeObjWithMaterials(dir / "tiles.obj", tiles, std::vector<int>(tiles.faceCount(), 0),
+                        {"t.<UDIM>.png"});
+  writeObjWithMaterials(dir / "single.obj", single, {}, {});
+  const Capture capture = captureAround(single, 6, 160, 160);
+  const Image truth = procedural::sampleTexture(2 * kTileTexels, 2 * kTileTexels);
+  std::filesystem::create_directories(dir / "images");
+  for (size_t k = 0; k < capture.cameras.size(); ++k) {
+    Image photo = renderPhoto(single, truth, capture.cameras[k], capture.looks[k]);
+    photo.format = PixelFormat::UInt8;
+    writeImage(dir / "images" / capture.cameras[k].name, photo);
+  }
+  writeCameraJson(dir / "cameras.json", capture.cameras);
+  const std::vector<std::string> options{
+      "--cameras", "cameras.json", "--images", "images", "--dilate-radius", "0", "--solver",
+      "direct",    "--bit-depth",  "float",    "-q"};
+  std::vector<std::string> paged{"texture", "tiles.obj",   "-r", std::to_string(kTileTexels),
+                                 "--out",   "t.<UDIM>.exr"},
+      one{"texture", "single.obj", "-r", std::to_string(2 * kTileTexels), "--out", "s.exr"};
+  paged.insert(paged.end(), options.begin(), options.end());
+  one.insert(one.end(), options.begin(), options.end());
+  const CliResult a = runCli(paged, dir), b = runCli(one, dir);
+  ASSERT_EQ(a.status, 0) << a.err;
+  ASSERT_EQ(b.status, 0) << b.err;
+  const Image whole = readImage(dir / "s.exr");
+  double worst = 0.0, range = 0.0;
+  for (const auto& [name, k, l] : {std::tuple{"1001", 0, 0}, std::tuple{"1002", 1, 0},
+                                   std::tuple{"1011", 0, 1}, std::tuple{"1012", 1, 1}}) {
+    const Image tile = readImage(dir / ("t." + std::string(name) + ".exr"));
+    ASSERT_EQ(tile.width, kTileTexels) << name;
+    for (int j = 0; j < kTileTexels; ++j)
+      for (int i = 0; i < kTileTexels; ++i)
+        for (int c = 0; c < tile.channels; ++c) {
+          const double w = whole.at(k * kTileTexels + i, l * kTileTexels + j, c);
+          worst = std::max(worst, std::abs(double(tile.at(i, j, c)) - w));
+          range = std::max(range, std::abs(w));
+        }
+  }
+  EXPECT_GT(range, 0.1);  // the photos were stitched into it
+  EXPECT_LT(worst, kPagesCliTolerance);
   std::filesystem::remove_all(dir);
 }
 
