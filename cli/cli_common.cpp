@@ -263,7 +263,10 @@ void addWrapOption(CLI::App* cmd, std::string& wrap) {
                   "tiles are moved into the image, faces straddling a tile border are cut there "
                   "and joined by a seam), mirror (every other tile mirrored), clamp (UVs used as "
                   "they are; an atlas wholly outside the image is refused), or auto (the mesh's "
-                  "sampler: glTF's wrapS/wrapT, OBJ -clamp; repeat when it names none)")
+                  "sampler: glTF's wrapS/wrapT, OBJ -clamp; repeat when it names none). Not used "
+                  "for UDIM tiles (a texture named with <UDIM> or %04d): a UV outside one tile "
+                  "lies in another, so faces straddling tiles are cut at the border and joined by "
+                  "a seam, and every tile stays in place")
       ->default_val("auto")
       ->check(CLI::IsMember({"auto", "repeat", "mirror", "clamp"}));
 }

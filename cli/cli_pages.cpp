@@ -68,7 +68,7 @@ void requireOnePageMesh(const TexturedMesh& mesh, const std::string& command) {
                            "images yet, and " + mesh.sourcePath.string() + "'s baseColor " +
                            "texture has " + std::to_string(layout.pages.size()) +
                            " pages (UDIM tiles or materials); filter, seams, dilate, geodesic, "
-                           "lic and react do");
+                           "lic, react and texture do");
 }
 
 void checkPagedOutputArgs(const std::string& out, const PageLayout& layout,

@@ -37,9 +37,12 @@ void runTexture(TextureArgs args) {
   TexturedMesh mesh = runStage(progress, "read", [&] {
     return wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
   });
-  requireOnePageMesh(mesh, "texture");
+  // Over several pages (UDIM tiles, one image per material) each page is width x height and the
+  // photos are projected onto their layout at once: seams between pages are stitched too.
+  PagedTexture paged = placeOnPagesOfSize(std::move(mesh), width, height);
+  checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
   timer.lap("read");
-  TexelDomain domain(std::move(mesh), width, height, {}, progress);
+  TexelDomain domain(std::move(paged.mesh), paged.layout.width, paged.layout.height, {}, progress);
   timer.lap("operators");
   // Only the compact views (or, with --select best, the running best view) stay in memory; the
   // projector's surface points and normals go once every photo is projected.
@@ -80,11 +83,12 @@ void runTexture(TextureArgs args) {
       dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image, args.dilate);
   timer.lap("dilate");
   const PixelFormat stored = runStage(progress, "write", [&] {
-    return writeTextureOutput(args.out, domain.mesh(), padded, "baseColor", args.bitDepth,
-                              args.report.quiet);
+    return writePagedTexture(args.out, domain.mesh(), paged.layout, padded, "baseColor",
+                             args.bitDepth, args.report.quiet);
   });
   timer.lap("write");
-  printWritten(args.report.quiet, args.out, padded, stored, domain.unknowns(), timer.total());
+  printWrittenPages(args.report.quiet, args.out, paged.layout, padded, stored, domain.unknowns(),
+                    timer.total());
   if (args.report.timings) timer.print();
   if (args.report.json)
     printJson({{"command", "texture"},
@@ -113,9 +117,14 @@ void addTextureCommand(CLI::App& app) {
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   addPhotoOptions(cmd, args->photos);
-  cmd->add_option("--resolution,-r", args->resolution, "Texture size WxH (or N for N x N)")
+  cmd->add_option("--resolution,-r", args->resolution,
+                  "Texture size WxH (or N for N x N); of each page for a texture over several "
+                  "pages (the mesh's map_Kd with a <UDIM> or %04d token, or one image per "
+                  "material)")
       ->check(resolutionValidator());
-  cmd->add_option("--out,-o", args->out, "Output image, or .gltf/.glb for a glTF copy")->required();
+  cmd->add_option("--out,-o", args->out,
+                  std::string("Output image, or .gltf/.glb for a glTF copy") + kPagedOutputHelp)
+      ->required();
   cmd->add_option("--select", args->select,
                   "all: blend every view's gradients by confidence; best: keep only the most "
                   "confident view per texel and remove the jumps between the chosen regions "

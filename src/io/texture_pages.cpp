@@ -92,7 +92,7 @@ std::array<int, 2> faceTile(const TexturedMesh& mesh, size_t f) {
         throw InvalidInputError(
             meshName(mesh) + ": " + describeFace(mesh, f) + " straddles UDIM tiles (UV " +
             std::to_string(uv.x()) + ", " + std::to_string(uv.y()) +
-            "); cut the UV charts along the tile borders so that every face lies in one tile");
+            "); cut the faces at the tile borders first (meshForPages or cutAtTileBorders does)");
   }
   return tile;
 }

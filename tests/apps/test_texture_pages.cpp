@@ -1,16 +1,19 @@
 // Texture pages (texgrad/io/texture_pages.h) through the apps: the charts of one atlas moved by
 // whole tiles onto 2 x 2 UDIM tiles give, tile by tile, what the single image holding the same
-// tiles as its quadrants gives (filter, geodesic, seams), seams between tiles included.
+// tiles as its quadrants gives (filter, geodesic, seams), seams between tiles included; a chart
+// straddling two tiles is cut at their border like its two halves built on the two tiles.
 #include <gtest/gtest.h>
 
 #include <array>
 
 #include "app_fixtures.h"
+#include "straddling_strip.h"
 #include "texgrad/apps/filter.h"
 #include "texgrad/apps/geodesic.h"
 #include "texgrad/apps/seams.h"
 #include "texgrad/atlas/atlas.h"
 #include "texgrad/atlas/seam_jump.h"
+#include "texgrad/core/error.h"
 #include "texgrad/io/procedural.h"
 #include "texgrad/io/texture_pages.h"
 
@@ -137,6 +140,73 @@ TEST(TexturePagesApps, SeamsBetweenTilesAreSmoothedLikeInTheSingleImage) {
   const double singleAfter = measureSeamJump(d.single.mesh(), d.single.atlas(), single.image).rms;
   EXPECT_LT(after, 0.25 * before);
   EXPECT_NEAR(after, singleAfter, kPagesTolerance);
+}
+
+/// Texels per tile side of the straddling strip's tiles.
+constexpr int kStripTile = 64;
+
+/// Filter (beta 0.2, direct solve) and geodesic distances of a mesh on UDIM tiles
+/// "strip.<UDIM>.png" (random tile images), as layout images, and the placed mesh's atlas.
+struct TiledStripOutputs {
+  PageLayout layout;
+  Image input, filtered, distances;
+  size_t charts = 0, seams = 0;
+};
+TiledStripOutputs processOnTiles(const TexturedMesh& mesh, const Eigen::Vector3d& source) {
+  TiledStripOutputs out;
+  out.layout = findTexturePages(mesh, "baseColor", "strip.<UDIM>.png");
+  std::vector<Image> tiles;
+  for (TexturePage& page : out.layout.pages) {
+    page.width = page.height = kStripTile;
+    tiles.push_back(test::randomTexture(kStripTile, kStripTile, 3, 11u + unsigned(tiles.size())));
+  }
+  arrangePages(out.layout);
+  out.input = composePages(out.layout, tiles);
+  const TexelDomain domain(placeOnPages(mesh, out.layout), out.layout.width, out.layout.height);
+  out.charts = domain.atlas().charts.size();
+  out.seams = domain.atlas().seams.size();
+  FilterOptions filter;
+  filter.beta = 0.2;
+  filter.solver.kind = SolverKind::Direct;
+  out.filtered = filterTexture(domain, out.input, filter).image;
+  GeodesicOptions geodesic;
+  geodesic.solver.kind = SolverKind::Direct;
+  const std::array<GeodesicSource, 1> sources{GeodesicSource::atPoint(source)};
+  out.distances = Image(out.layout.width, out.layout.height, 1, PixelFormat::Float);
+  scatterTexels(domain.grid(), geodesicDistance(domain, sources, geodesic).distances,
+                out.distances);
+  return out;
+}
+
+/// Largest difference of two images of one size.
+double largestDifference(const Image& a, const Image& b) {
+  EXPECT_EQ(a.pixels.size(), b.pixels.size());
+  double worst = 0.0;
+  for (size_t i = 0; i < a.pixels.size() && i < b.pixels.size(); ++i)
+    worst = std::max(worst, static_cast<double>(std::abs(a.pixels[i] - b.pixels[i])));
+  return worst;
+}
+
+TEST(TexturePagesApps, AChartStraddlingTwoTilesMatchesItsHalvesOnTheTwoTiles) {
+  const test::StraddlingStrip strip;
+  const TexturedMesh straddling = strip.straddling(), halves = strip.halves(0.0);
+  // Library callers that skip meshForPages get the refusal naming the face.
+  EXPECT_THROW(findTexturePages(straddling, "baseColor", "strip.<UDIM>.png"), InvalidInputError);
+  const WrappedMesh cut = meshForPages(straddling, {}, "baseColor", "strip.<UDIM>.png");
+  EXPECT_EQ(cut.mesh.faceCount(), straddling.faceCount() + 2);
+
+  const Eigen::Vector3d source(0.3, 0.45, 0.1);
+  const TiledStripOutputs a = processOnTiles(cut.mesh, source);
+  const TiledStripOutputs b = processOnTiles(halves, source);
+  ASSERT_EQ(a.layout.pages.size(), 2u);
+  EXPECT_EQ(a.layout.pages[0].name, "1001");
+  EXPECT_EQ(a.layout.pages[1].name, "1002");
+  EXPECT_EQ(a.layout.pages[1].offset, b.layout.pages[1].offset);
+  EXPECT_EQ(a.charts, 2u);  // one per tile
+  EXPECT_EQ(a.seams, 2u);   // P1-X and X-R1, on the border of tiles 1001 and 1002
+  EXPECT_GT(largestDifference(a.filtered, a.input), 0.1);  // it filtered
+  EXPECT_LT(largestDifference(a.filtered, b.filtered), kPagesTolerance);
+  EXPECT_LT(largestDifference(a.distances, b.distances), kPagesTolerance);
 }
 
 }  // namespace

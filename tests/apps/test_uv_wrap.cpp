@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "app_fixtures.h"
+#include "straddling_strip.h"
 #include "test_paths.h"
 #include "texgrad/apps/filter.h"
 #include "texgrad/apps/geodesic.h"
@@ -114,60 +115,9 @@ TEST(UvWrap, ClampToEdgeKeepsTheRefusal) {
   }
 }
 
-/// A bent strip over x, y in [0, 1] whose UVs (0.75 + 0.5 x, 0.1 + 0.8 y) straddle u = 1 (x =
-/// 0.5): two faces cross that line through one corner on it and meet at their shared edge's
-/// crossing X = (0.5, 0.5), so the cut pieces are triangles and can be built directly.
-struct Strip {
-  std::vector<Eigen::Vector2d> xy{
-      {0, 0},   {0.5, 0}, {1, 0},   {0, 0.5}, {0.25, 0.5}, {0.75, 0.5},
-      {1, 0.5}, {0, 1},   {0.5, 1}, {1, 1},   {0.5, 0.5}};  // the last is X
-  /// Faces (counter-clockwise in x, y); the two crossing faces are 2 and 7.
-  std::vector<Triangle> faces{{0, 1, 4}, {0, 4, 3}, {1, 5, 4}, {1, 2, 5}, {2, 6, 5},
-                              {3, 4, 7}, {4, 8, 7}, {4, 5, 8}, {5, 9, 8}, {5, 6, 9}};
-  /// The pieces of faces 2 and 7: left of u = 1, then right of it.
-  std::vector<Triangle> left{{1, 10, 4}, {4, 10, 8}}, right{{1, 5, 10}, {10, 5, 8}};
-
-  Eigen::Vector3d position(int i) const {
-    if (i == 10) return 0.5 * (position(4) + position(5));  // on the edge it cuts
-    const Eigen::Vector2d& p = xy[static_cast<size_t>(i)];
-    return {p.x(), p.y(), 0.3 * p.x() * p.y() + 0.2 * p.x() * p.x()};
-  }
-  /// Appends face (a, b, c) with u shifted by du (each corner its own UV).
-  static void add(TexturedMesh& m, const Strip& s, const Triangle& t, double du) {
-    Triangle uv{};
-    for (int c = 0; c < 3; ++c) {
-      const Eigen::Vector2d& p = s.xy[static_cast<size_t>(t[c])];
-      uv[c] = static_cast<int32_t>(m.uvs.size());
-      m.uvs.emplace_back(0.75 + 0.5 * p.x() + du, 0.1 + 0.8 * p.y());
-    }
-    m.triangles.push_back(t);
-    m.uvTriangles.push_back(uv);
-  }
-  TexturedMesh withPositions() const {
-    TexturedMesh m;
-    for (int i = 0; i < static_cast<int>(xy.size()); ++i) m.positions.push_back(position(i));
-    return m;
-  }
-  /// One chart: faces joined where their UVs coincide (UVs are per corner, equal by value).
-  TexturedMesh straddling() const {
-    TexturedMesh m = withPositions();
-    for (const Triangle& t : faces) add(m, *this, t, 0.0);
-    return m;
-  }
-  /// The two halves as separate charts: x <= 0.5 at u in [0.75, 1], x >= 0.5 at u in [0, 0.25].
-  TexturedMesh halves() const {
-    TexturedMesh m = withPositions();
-    for (size_t f : {0, 1, 5, 6}) add(m, *this, faces[f], 0.0);
-    for (const Triangle& t : left) add(m, *this, t, 0.0);
-    for (size_t f : {3, 4, 8, 9}) add(m, *this, faces[f], -1.0);
-    for (const Triangle& t : right) add(m, *this, t, -1.0);
-    return m;
-  }
-};
-
 TEST(UvWrap, AChartStraddlingATileBorderMatchesItsTwoHalvesJoinedByASeam) {
-  const Strip strip;
-  const TexturedMesh straddling = strip.straddling(), halves = strip.halves();
+  const test::StraddlingStrip strip;
+  const TexturedMesh straddling = strip.straddling(), halves = strip.halves(-1.0);
   EXPECT_EQ(buildAtlas(straddling).charts.size(), 1u);
   const Atlas halvesAtlas = buildAtlas(halves);
   EXPECT_EQ(halvesAtlas.charts.size(), 2u);

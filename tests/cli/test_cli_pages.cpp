@@ -1,14 +1,20 @@
 // Texture pages through the CLI: a mesh re-exported with two materials (half the charts each,
 // the same image twice) filters to what the one-texture original gives, one image per page;
-// UDIM tiles by the TEXTURE argument's token; `info` lists the pages; a missing page is named.
+// UDIM tiles by the TEXTURE argument's token; `info` lists the pages; a missing page is named;
+// a chart straddling two UDIM tiles stays continuous across their border; `texture` from photos
+// over UDIM tiles gives, tile by tile, what it gives on the single image of the same charts.
 #include <gtest/gtest.h>
 
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "cli_runner.h"
+#include "photo_scene.h"
+#include "straddling_strip.h"
 #include "test_paths.h"
 #include "texgrad/atlas/atlas.h"
+#include "texgrad/io/camera_writer.h"
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/procedural.h"
@@ -20,22 +26,26 @@ namespace {
 constexpr double kPagesCliTolerance = 1e-6;
 
 /// Writes `mesh` as an OBJ whose face f uses material `names[material(f)]`, each material's
-/// map_Kd the matching entry of `images` (one material and image: the plain original).
+/// map_Kd the matching entry of `images` (one material and image: the plain original; none: an
+/// OBJ without materials).
 void writeObjWithMaterials(const std::filesystem::path& obj, const TexturedMesh& mesh,
                            const std::vector<int>& faceMaterial,
                            const std::vector<std::string>& images) {
-  std::ofstream mtl(obj.parent_path() / (obj.stem().string() + ".mtl"));
-  for (size_t m = 0; m < images.size(); ++m)
-    mtl << "newmtl m" << m << "\nmap_Kd " << images[m] << "\n";
+  if (!images.empty()) {
+    std::ofstream mtl(obj.parent_path() / (obj.stem().string() + ".mtl"));
+    for (size_t m = 0; m < images.size(); ++m)
+      mtl << "newmtl m" << m << "\nmap_Kd " << images[m] << "\n";
+  }
   std::ofstream out(obj);
   out.precision(17);
-  out << "mtllib " << obj.stem().string() << ".mtl\n";
+  if (!images.empty()) out << "mtllib " << obj.stem().string() << ".mtl\n";
   for (const Eigen::Vector3d& p : mesh.positions)
     out << "v " << p.x() << " " << p.y() << " " << p.z() << "\n";
   for (const Eigen::Vector2d& uv : mesh.uvs) out << "vt " << uv.x() << " " << uv.y() << "\n";
   int current = -1;
   for (size_t f = 0; f < mesh.faceCount(); ++f) {
-    if (faceMaterial[f] != current) out << "usemtl m" << (current = faceMaterial[f]) << "\n";
+    if (!images.empty() && faceMaterial[f] != current)
+      out << "usemtl m" << (current = faceMaterial[f]) << "\n";
     out << "f";
     for (int k = 0; k < 3; ++k)
       out << " " << mesh.triangles[f][k] + 1 << "/" << mesh.uvTriangles[f][k] + 1;
@@ -221,6 +231,105 @@ TEST(CliPages, UdimTilesNamedOnTheCommandLineAreListedAndProcessed) {
   ASSERT_EQ(filter.status, 0) << filter.err;
   for (const char* tile : {"1001", "1002", "1011", "1012"})
     EXPECT_TRUE(std::filesystem::exists(dir / ("out." + std::string(tile) + ".png"))) << tile;
+  std::filesystem::remove_all(dir);
+}
+
+/// A square 8-bit RGB image of uniform random texels in [lo, hi] (seeded).
+Image randomTile(int size, unsigned seed, int lo, int hi) {
+  Image image(size, size, 3, PixelFormat::UInt8);
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> level(lo, hi);
+  for (float& p : image.pixels) p = static_cast<float>(level(rng)) / 255.0f;
+  return image;
+}
+
+/// RMS, over the rows whose centres the straddling strip's seam at u = 1 crosses (v in
+/// [0.1, 0.9], the same rows whichever way rows run), of the difference between what a renderer
+/// reads on its two sides: tile `left` at u = 1 (its last column, clamped to the edge) and tile
+/// `right` at u = 0 (its first column).
+double jumpAcrossTileBorder(const Image& left, const Image& right) {
+  double sum = 0.0;
+  int count = 0;
+  for (int j = 0; j < left.height; ++j) {
+    const double v = (j + 0.5) / left.height;
+    if (v < 0.1 || v > 0.9) continue;
+    for (int c = 0; c < left.channels; ++c, ++count)
+      sum += std::pow(double(left.at(left.width - 1, j, c)) - right.at(0, j, c), 2);
+  }
+  return std::sqrt(sum / count);
+}
+
+TEST(CliPages, AChartStraddlingTwoUdimTilesStaysContinuousAcrossTheirBorder) {
+  const auto dir = tempDir("cli_pages_straddle");
+  const TexturedMesh strip = StraddlingStrip().straddling();
+  writeObjWithMaterials(dir / "strip.obj", strip, std::vector<int>(strip.faceCount(), 0), {});
+  constexpr int kSize = 64;
+  // Dark noise left of the border, bright noise right of it: charts smoothed apart would each
+  // keep their own mean, so only a seam joining them makes the output continuous.
+  writeImage(dir / "tex.1001.png", randomTile(kSize, 1, 0, 127));
+  writeImage(dir / "tex.1002.png", randomTile(kSize, 2, 128, 255));
+  // beta 0 with a weak screening (alpha 100) smooths the noise away on both sides.
+  const CliResult filter =
+      runCli({"filter", "strip.obj", "tex.<UDIM>.png", "--out", "out.<UDIM>.png", "--beta", "0",
+              "--alpha", "100", "--solver", "direct", "-q"},
+             dir);
+  ASSERT_EQ(filter.status, 0) << filter.err;
+  const Image out1 = readImage(dir / "out.1001.png"), out2 = readImage(dir / "out.1002.png");
+  ASSERT_EQ(out1.width, kSize);
+  ASSERT_EQ(out2.width, kSize);
+  const double before =
+      jumpAcrossTileBorder(readImage(dir / "tex.1001.png"), readImage(dir / "tex.1002.png"));
+  const double after = jumpAcrossTileBorder(out1, out2);
+  EXPECT_GT(before, 0.4);
+  EXPECT_LT(after, 0.25 * before) << "before " << before << ", after " << after;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(CliPages, TextureFromPhotosOverUdimTilesMatchesTheSingleImage) {
+  const auto dir = tempDir("cli_pages_texture");
+  constexpr int kTileTexels = 128;  // the charts keep >= 3 texels from every tile border
+  const TexturedMesh tiles = tiledSphere();
+  TexturedMesh single = tiles;  // the 2 x 2 tiles as the quadrants of one image
+  for (Eigen::Vector2d& uv : single.uvs) uv /= 2.0;
+  writeObjWithMaterials(dir / "tiles.obj", tiles, std::vector<int>(tiles.faceCount(), 0),
+                        {"t.<UDIM>.png"});
+  writeObjWithMaterials(dir / "single.obj", single, {}, {});
+  const Capture capture = captureAround(single, 6, 160, 160);
+  const Image truth = procedural::sampleTexture(2 * kTileTexels, 2 * kTileTexels);
+  std::filesystem::create_directories(dir / "images");
+  for (size_t k = 0; k < capture.cameras.size(); ++k) {
+    Image photo = renderPhoto(single, truth, capture.cameras[k], capture.looks[k]);
+    photo.format = PixelFormat::UInt8;
+    writeImage(dir / "images" / capture.cameras[k].name, photo);
+  }
+  writeCameraJson(dir / "cameras.json", capture.cameras);
+  const std::vector<std::string> options{
+      "--cameras", "cameras.json", "--images", "images", "--dilate-radius", "0", "--solver",
+      "direct",    "--bit-depth",  "float",    "-q"};
+  std::vector<std::string> paged{"texture", "tiles.obj",   "-r", std::to_string(kTileTexels),
+                                 "--out",   "t.<UDIM>.exr"},
+      one{"texture", "single.obj", "-r", std::to_string(2 * kTileTexels), "--out", "s.exr"};
+  paged.insert(paged.end(), options.begin(), options.end());
+  one.insert(one.end(), options.begin(), options.end());
+  const CliResult a = runCli(paged, dir), b = runCli(one, dir);
+  ASSERT_EQ(a.status, 0) << a.err;
+  ASSERT_EQ(b.status, 0) << b.err;
+  const Image whole = readImage(dir / "s.exr");
+  double worst = 0.0, range = 0.0;
+  for (const auto& [name, k, l] : {std::tuple{"1001", 0, 0}, std::tuple{"1002", 1, 0},
+                                   std::tuple{"1011", 0, 1}, std::tuple{"1012", 1, 1}}) {
+    const Image tile = readImage(dir / ("t." + std::string(name) + ".exr"));
+    ASSERT_EQ(tile.width, kTileTexels) << name;
+    for (int j = 0; j < kTileTexels; ++j)
+      for (int i = 0; i < kTileTexels; ++i)
+        for (int c = 0; c < tile.channels; ++c) {
+          const double w = whole.at(k * kTileTexels + i, l * kTileTexels + j, c);
+          worst = std::max(worst, std::abs(double(tile.at(i, j, c)) - w));
+          range = std::max(range, std::abs(w));
+        }
+  }
+  EXPECT_GT(range, 0.1);  // the photos were stitched into it
+  EXPECT_LT(worst, kPagesCliTolerance);
   std::filesystem::remove_all(dir);
 }
 

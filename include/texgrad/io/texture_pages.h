@@ -65,9 +65,10 @@ bool isUdimTexture(const TexturedMesh& mesh, const std::string& slot = "baseColo
                    const std::filesystem::path& texture = {});
 
 /// The mesh as the pages of its `slot` texture (or of `texture`) read it, with each face's
-/// parent face: for UDIM tiles each tile is a page, so faces are cut at the tile borders and
-/// stay in their tiles; any other texture wraps by `wrap` (wrapTextureCoordinates), each of its
-/// pages read like a single image.
+/// parent face: for UDIM tiles each tile is a page, so faces are cut at the tile borders (a chart
+/// straddling two tiles becomes two charts joined by a seam) and stay in their tiles, and `wrap`
+/// is not used (a UV outside one tile is in another); any other texture wraps by `wrap`
+/// (wrapTextureCoordinates), each of its pages read like a single image.
 WrappedMesh meshForPages(TexturedMesh mesh, UvWrap wrap, const std::string& slot = "baseColor",
                          const std::filesystem::path& texture = {});
 
@@ -76,8 +77,9 @@ WrappedMesh meshForPages(TexturedMesh mesh, UvWrap wrap, const std::string& slot
 /// per UDIM tile the faces use: a face's tile is the floor (k, l) of its UV centroid, tile number
 /// 1001 + k + 10 l. Otherwise each distinct image of the slot's materials is a page and a face
 /// lies on the page of its material (TexturedMesh::faceMaterial); one image or none: one page
-/// with every face. Throws InvalidInputError naming the face for a face straddling tiles, a tile
-/// outside 1001..1100, or a face whose material has no image in a multi-page slot.
+/// with every face. Throws InvalidInputError naming the face for a face straddling tiles (run the
+/// mesh through meshForPages first: it cuts such faces), a tile outside 1001..1100, or a face
+/// whose material has no image in a multi-page slot.
 PageLayout findTexturePages(const TexturedMesh& mesh, const std::string& slot = "baseColor",
                             const std::filesystem::path& texture = {});
 
