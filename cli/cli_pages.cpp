@@ -74,11 +74,14 @@ void requireOnePageMesh(const TexturedMesh& mesh, const std::string& command) {
 void checkPagedOutputArgs(const std::string& out, const PageLayout& layout,
                           const std::string& bitDepth) {
   if (layout.single()) return;  // checkTextureOutputArgs checked `out` itself
-  if (isGltfPath(out))
-    throw UnsupportedError("--out " + out + ": writing a glTF asset whose texture has " +
-                           std::to_string(layout.pages.size()) +
-                           " pages is not supported yet; write images (--out NAME.png gives "
-                           "one NAME.<page>.png per page)");
+  // A glTF copy: checkTextureOutputArgs checked the source and the depth.
+  if (isGltfPath(out)) {
+    if (layout.udim)
+      throw UnsupportedError("--out " + out + ": the " + layout.slot +
+                             " texture is UDIM tiles, which glTF cannot name; write images "
+                             "(--out NAME.<UDIM>.png gives one image per tile)");
+    return;
+  }
   for (size_t p = 0; p < layout.pages.size(); ++p)
     checkImageOutput(pageOutputPath(out, layout, p), requestedFormat(bitDepth));
 }
@@ -89,6 +92,14 @@ PixelFormat writePagedTexture(const std::string& out, const TexturedMesh& mesh,
   if (layout.single() && !hasUdimToken(out))
     return writeTextureOutput(out, mesh, image, slot, bitDepth, quiet);
   checkPagedOutputArgs(out, layout, bitDepth);
+  if (isGltfPath(out)) {
+    const WrittenTexture written =
+        writeGltfTexturePages(out, mesh, layout, image, requestedFormat(bitDepth));
+    if (!quiet)
+      for (const std::string& warning : written.warnings)
+        std::cerr << "texgrad: warning: " << warning << "\n";
+    return written.stored;
+  }
   PixelFormat stored = image.format;
   for (size_t p = 0; p < layout.pages.size(); ++p)  // one page in memory at a time
     stored = writeImage(pageOutputPath(out, layout, p), pageImage(layout, image, p),
@@ -113,9 +124,11 @@ void printWrittenPages(bool quiet, const std::string& out, const PageLayout& lay
   }
   if (quiet) return;
   std::ostringstream files;
+  if (isGltfPath(out)) files << out << " with ";  // one image per page inside the copy
   for (size_t p = 0; p < layout.pages.size(); ++p)
-    files << (p == 0 ? "" : ", ") << pageOutputPath(out, layout, p).string() << " ("
-          << layout.pages[p].width << "x" << layout.pages[p].height << ")";
+    files << (p == 0 ? "" : ", ")
+          << (isGltfPath(out) ? layout.pages[p].name : pageOutputPath(out, layout, p).string())
+          << " (" << layout.pages[p].width << "x" << layout.pages[p].height << ")";
   std::ostringstream line;
   static constexpr std::array<const char*, 4> kChannels{"1-channel", "2-channel", "RGB", "RGBA"};
   line << "wrote " << layout.pages.size() << (layout.pages.size() == 1 ? " page: " : " pages: ")

@@ -16,7 +16,8 @@ namespace texgrad::cli {
 inline constexpr const char* kPagedOutputHelp =
     ". A texture over several pages (UDIM tiles, or one image per material) gives one image per "
     "page: a <UDIM> or %04d in the name is replaced by the tile number, else the page name goes "
-    "before the extension (out.png -> out.1001.png or out.MATERIAL.png)";
+    "before the extension (out.png -> out.1001.png or out.MATERIAL.png); a glTF copy gets each "
+    "material's page in place of its image (UDIM tiles: images only)";
 
 /// What the TEXTURE argument accepts, appended to its help.
 inline constexpr const char* kPagedInputHelp =
@@ -53,12 +54,13 @@ void requireSinglePage(const PageLayout& layout, const std::string& option,
 void requireOnePageMesh(const TexturedMesh& mesh, const std::string& command);
 
 /// Checks, before the work, that every page of `out` can be written: checkImageOutput for each
-/// page's file; a glTF output of several pages is refused (one line).
+/// page's file; a glTF output of UDIM tiles is refused (one line), of material pages accepted.
 void checkPagedOutputArgs(const std::string& out, const PageLayout& layout,
                           const std::string& bitDepth);
 
-/// Writes the layout image `image`: writeTextureOutput for one page, else each page to its
-/// pageOutputPath. Returns the pixel format stored.
+/// Writes the layout image `image`: writeTextureOutput for one page; else each page to its
+/// pageOutputPath, or for a glTF `out` into the copy in place of its image
+/// (writeGltfTexturePages). Returns the pixel format stored.
 PixelFormat writePagedTexture(const std::string& out, const TexturedMesh& mesh,
                               const PageLayout& layout, const Image& image, const std::string& slot,
                               const std::string& bitDepth, bool quiet);

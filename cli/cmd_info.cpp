@@ -11,6 +11,7 @@
 #include "texgrad/atlas/texel_grid.h"
 #include "texgrad/core/path_exists.h"
 #include "texgrad/io/image_io.h"
+#include "texgrad/io/texture_page_report.h"
 #include "texgrad/io/texture_pages.h"
 
 namespace texgrad::cli {
@@ -32,45 +33,6 @@ void printIds(const AtlasIssue& issue, int maxIds) {
   for (size_t k = 0; k < shown; ++k) std::cout << " " << issue.ids[k];
   if (issue.ids.size() > shown) std::cout << " ... (" << issue.ids.size() << " in all)";
   std::cout << "\n";
-}
-
-/// One texture slot's pages (findTexturePages), each image's size when it can be read, and
-/// one line per problem (a missing page image, a face no page holds).
-struct SlotPages {
-  std::string slot;
-  PageLayout layout;
-  std::vector<std::string> problems;
-};
-
-/// The pages of every slot the mesh names (of `texture` alone when it holds a UDIM token).
-std::vector<SlotPages> findPages(const TexturedMesh& mesh, const std::string& texture) {
-  std::vector<std::string> slots;
-  if (hasUdimToken(texture)) slots.push_back("baseColor");
-  for (const TextureRef& t : mesh.textures)
-    if (texture.empty() && std::find(slots.begin(), slots.end(), t.slot) == slots.end())
-      slots.push_back(t.slot);
-  std::vector<SlotPages> all;
-  for (const std::string& slot : slots) {
-    SlotPages pages{slot, {}, {}};
-    try {
-      pages.layout = findTexturePages(mesh, slot, hasUdimToken(texture) ? texture : "");
-    } catch (const Error& e) {
-      pages.problems.push_back(e.what());
-      all.push_back(std::move(pages));
-      continue;
-    }
-    for (size_t p = 0; p < pages.layout.pages.size(); ++p) {
-      TexturePage& page = pages.layout.pages[p];
-      try {
-        requirePageImage(pages.layout, mesh, p);
-        if (!page.path.empty()) std::tie(page.width, page.height) = readImageSize(page.path);
-      } catch (const Error& e) {
-        pages.problems.push_back(e.what());
-      }
-    }
-    all.push_back(std::move(pages));
-  }
-  return all;
 }
 
 /// "1024x1024" or "?" when the image could not be read.
@@ -96,24 +58,6 @@ bool printPages(const std::vector<SlotPages>& slots) {
     problems = problems || !s.problems.empty();
   }
   return problems;
-}
-
-/// The pages as JSON: {"baseColor": {"udim": true, "pages": [{name, file, width, height,
-/// faces}], "problems": [...]}}.
-nlohmann::json pagesJson(const std::vector<SlotPages>& slots) {
-  nlohmann::json j = nlohmann::json::object();
-  for (const SlotPages& s : slots) {
-    nlohmann::json pages = nlohmann::json::array();
-    for (const TexturePage& page : s.layout.pages)
-      pages.push_back({{"name", page.name},
-                       {"file", page.path.empty() ? nlohmann::json(nullptr)
-                                                  : nlohmann::json(page.path.string())},
-                       {"width", page.width},
-                       {"height", page.height},
-                       {"faces", page.faces}});
-    j[s.slot] = {{"udim", s.layout.udim}, {"pages", pages}, {"problems", s.problems}};
-  }
-  return j;
 }
 
 /// Prints the textures, their pages and missing files; returns true if there is anything to warn
@@ -178,12 +122,11 @@ void runInfo(const InfoArgs& args) {
     const auto [w, h] = parseResolution(resolution);
     grid = buildTexelGrid(mesh, atlas, w, h);
   }
-  const std::vector<SlotPages> pages = findPages(mesh, args.texture);
-  const AtlasReport report = analyzeAtlas(mesh, atlas, grid ? &*grid : nullptr);
+  const std::vector<SlotPages> pages = reportTexturePages(mesh, args.texture);
+  const AtlasReport report =
+      analyzeAtlas(mesh, atlas, grid ? &*grid : nullptr, slotLayout(pages, "baseColor"));
   if (args.json) {
-    nlohmann::json j = nlohmann::json::parse(atlasReportJson(report, mesh, args.mesh));
-    j["pages"] = pagesJson(pages);
-    std::cout << j.dump(2) << "\n";
+    std::cout << atlasReportJson(report, mesh, pages, args.mesh) << "\n";
   } else {
     printText(args.mesh, report, mesh, pages, args.maxIds);
   }

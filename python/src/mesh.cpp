@@ -18,6 +18,8 @@
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/mesh_texture.h"
+#include "texgrad/io/texture_page_report.h"
+#include "texgrad/io/texture_pages.h"
 #include "texgrad/io/uv_tiles.h"
 
 namespace texgrad::python {
@@ -118,17 +120,18 @@ py::dict atlasReport(const TexturedMesh& mesh, const py::object& resolution) {
       throw InvalidInputError("resolution must be positive, got " + std::to_string(size->first) +
                               " x " + std::to_string(size->second));
   }
-  AtlasReport report;
+  std::string json;
   {
     py::gil_scoped_release release;
     const Atlas atlas = buildAtlas(mesh);
     std::optional<TexelGrid> grid;
     if (size) grid = buildTexelGrid(mesh, atlas, size->first, size->second);
-    report = analyzeAtlas(mesh, atlas, grid ? &*grid : nullptr);
+    const std::vector<SlotPages> pages = reportTexturePages(mesh);
+    const AtlasReport report =
+        analyzeAtlas(mesh, atlas, grid ? &*grid : nullptr, slotLayout(pages, "baseColor"));
+    json = atlasReportJson(report, mesh, pages, mesh.sourcePath.string());
   }
-  return py::module_::import("json")
-      .attr("loads")(atlasReportJson(report, mesh, mesh.sourcePath.string()))
-      .cast<py::dict>();
+  return py::module_::import("json").attr("loads")(json).cast<py::dict>();
 }
 
 PixelFormat formatOf(SampleType type) {
@@ -215,7 +218,7 @@ void registerMesh(py::module_& m) {
             WrappedMesh wrapped;
             {
               py::gil_scoped_release release;
-              wrapped = wrapTextureCoordinates(mesh, mode);
+              wrapped = meshForPages(mesh, mode, slot);
             }
             py::array_t<int32_t> parents(static_cast<py::ssize_t>(wrapped.parentFace.size()));
             std::copy(wrapped.parentFace.begin(), wrapped.parentFace.end(), parents.mutable_data());
@@ -224,8 +227,9 @@ void registerMesh(py::module_& m) {
           py::arg("wrap") = "auto", py::arg("slot") = "baseColor",
           "(mesh, parents): the mesh as a texture that wraps reads it, as the CLI's --wrap: "
           "faces crossing an integer UV line cut there (the sides joined by a seam) and every "
-          "unit tile moved into [0, 1]^2; wrap 'auto' (the sampler of the texture in `slot`, "
-          "repeat when none), 'repeat', 'mirror' or 'clamp' (unchanged). parents[f] is the face "
+          "unit tile moved into [0, 1]^2 (a UDIM texture's tiles are pages: they stay); wrap "
+          "'auto' (the sampler of the texture in `slot`, repeat when none), 'repeat', 'mirror' "
+          "or 'clamp' (unchanged). parents[f] is the face "
           "of this mesh that face f is part of: per-face 3-D vectors follow as field[parents].")
       .def("atlas_report", &atlasReport, py::arg("resolution") = py::none(),
            "The atlas diagnostics as the dict `texgrad info --json` prints (texel "
@@ -248,13 +252,13 @@ void registerMesh(py::module_& m) {
         py::gil_scoped_release release;
         TexturedMesh mesh = readMesh(path, options);
         const UvWrap mode = parseUvWrap(wrap, mesh, slot);
-        return std::make_shared<TexturedMesh>(wrapTextureCoordinates(std::move(mesh), mode).mesh);
+        return std::make_shared<TexturedMesh>(meshForPages(std::move(mesh), mode, slot).mesh);
       },
       py::arg("path"), py::kw_only(), py::arg("weld_tolerance") = 0.0, py::arg("uv_set") = 0,
       py::arg("wrap") = "auto", py::arg("slot") = "baseColor",
       "Reads a mesh file the CLI reads (.obj with its .mtl, .ply, .gltf, .glb), welding "
       "positions closer than weld_tolerance (model units) so seams are found (uv_set picks glTF's "
-      "TEXCOORD_N; OBJ and PLY have only 0), and wraps its UVs "
+      "TEXCOORD_N; OBJ and PLY have only 0), and wraps its UVs (not a UDIM texture's) "
       "as the CLI's --wrap does for the texture in `slot` (Mesh.wrapped): wrap 'auto' (the "
       "file's sampler, repeat when it names none), 'repeat', 'mirror' or 'clamp' (the file's "
       "UVs and faces as they are; per-face data of the file then match the faces).");

@@ -141,6 +141,25 @@ def test_atlas_report_matches_info_json(spot_mesh):
     assert report == expected
 
 
+def test_atlas_report_of_udim_tiles_matches_info_json(tmp_path):
+    # Two triangles in UDIM tiles 1001 and 1002: read_mesh keeps them in their tiles (the CLI's
+    # pages), so both list two pages, and no UV is outside its tile.
+    (tmp_path / "t.mtl").write_text("newmtl m\nmap_Kd t.<UDIM>.png\n")
+    (tmp_path / "t.obj").write_text(
+        "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+        "vt 0.2 0.2\nvt 0.8 0.2\nvt 0.2 0.8\nvt 1.2 0.2\nvt 1.8 0.2\nvt 1.2 0.8\n"
+        "usemtl m\nf 1/1 2/2 3/3\nf 1/4 2/5 4/6\n")
+    for tile in ("1001", "1002"):
+        texgrad.write_image(tmp_path / f"t.{tile}.png", np.zeros((8, 8, 3), np.uint8))
+    expected = json.loads(run_cli("info", tmp_path / "t.obj", "--json"))
+    report = texgrad.read_mesh(tmp_path / "t.obj").atlas_report()
+    assert [p["name"] for p in report["pages"]["baseColor"]["pages"]] == ["1001", "1002"]
+    assert all(i["kind"] != "uvs-outside-unit-square" for i in report["issues"])
+    expected.pop("mesh")
+    report.pop("mesh")
+    assert report == expected
+
+
 def test_mask_and_dilate_on_a_domain_equal_those_on_its_mesh(spot_mesh, spot_domain,
                                                              spot_texture_file):
     # A TexelDomain lends its own grid; a Mesh gets one built at the image's size.

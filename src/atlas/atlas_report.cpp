@@ -95,8 +95,31 @@ void addIssue(AtlasReport& r, std::string kind, std::string meaning, std::vector
                       blocking});
 }
 
-void meshIssues(const TexturedMesh& m, const Atlas& atlas, AtlasReport& r) {
-  std::vector<int64_t> degenerate3d, degenerateUv, flipped, outside;
+/// The UVs outside the unit square of their face's page: [0,1]^2 shifted to the face's UDIM
+/// tile (k, l) when `pages` is given (a UDIM mesh keeps its UVs in their tiles), else [0,1]^2.
+std::vector<int64_t> uvsOutsidePages(const TexturedMesh& m, const PageLayout* pages) {
+  std::vector<char> outside(m.uvs.size(), 0);
+  for (size_t f = 0; f < m.faceCount(); ++f) {
+    Eigen::Vector2d tile = Eigen::Vector2d::Zero();
+    if (pages) {
+      const TexturePage& page = pages->pages[static_cast<size_t>(pages->facePage[f])];
+      tile = Eigen::Vector2d(page.tileU, page.tileV);
+    }
+    for (int32_t t : m.uvTriangles[f]) {
+      const Eigen::Vector2d uv = m.uvs[static_cast<size_t>(t)] - tile;
+      if (uv.x() < 0.0 || uv.y() < 0.0 || uv.x() > 1.0 || uv.y() > 1.0)
+        outside[static_cast<size_t>(t)] = 1;
+    }
+  }
+  std::vector<int64_t> ids;
+  for (size_t k = 0; k < outside.size(); ++k)
+    if (outside[k]) ids.push_back(static_cast<int64_t>(k));
+  return ids;
+}
+
+void meshIssues(const TexturedMesh& m, const Atlas& atlas, const PageLayout* pages,
+                AtlasReport& r) {
+  std::vector<int64_t> degenerate3d, degenerateUv, flipped;
   for (int32_t f = 0; f < static_cast<int32_t>(m.faceCount()); ++f) {
     const Triangle& t = m.triangles[f];
     const Eigen::Vector3d e1 = m.positions[t[1]] - m.positions[t[0]];
@@ -106,11 +129,6 @@ void meshIssues(const TexturedMesh& m, const Atlas& atlas, AtlasReport& r) {
     const double a = uvArea2(m, f);
     if (a == 0.0) degenerateUv.push_back(f);
     if (a < 0.0) flipped.push_back(f);
-  }
-  for (size_t k = 0; k < m.uvs.size(); ++k) {
-    const Eigen::Vector2d& uv = m.uvs[k];
-    if (uv.x() < 0.0 || uv.y() < 0.0 || uv.x() > 1.0 || uv.y() > 1.0)
-      outside.push_back(static_cast<int64_t>(k));
   }
   addIssue(r, "degenerate-3d-triangles",
            "faces with (near) zero surface area; they carry no metric and are ignored by the "
@@ -124,9 +142,10 @@ void meshIssues(const TexturedMesh& m, const Atlas& atlas, AtlasReport& r) {
            "shares texels with nothing else only if it does not overlap other charts",
            std::move(flipped), "face");
   addIssue(r, "uvs-outside-unit-square",
-           "texture coordinates outside [0,1]; texels beyond the image edge are solved but "
-           "cannot be stored, so the renderer's clamp/wrap decides what shows there",
-           std::move(outside), "uv");
+           "texture coordinates outside [0,1] (of their UDIM tile, for tiles); texels beyond the "
+           "image edge are solved but cannot be stored, so the renderer's clamp/wrap decides "
+           "what shows there",
+           uvsOutsidePages(m, pages), "uv");
   std::vector<int64_t> nonManifoldEdgeFaces;
   for (const auto& group : atlas.nonManifoldEdges)
     for (const FaceEdge& e : group) nonManifoldEdgeFaces.push_back(e.face);
@@ -225,7 +244,8 @@ void texelIssues(const TexelGrid& g, const TexelStats& s, AtlasReport& r) {
 
 }  // namespace
 
-AtlasReport analyzeAtlas(const TexturedMesh& mesh, const Atlas& atlas, const TexelGrid* grid) {
+AtlasReport analyzeAtlas(const TexturedMesh& mesh, const Atlas& atlas, const TexelGrid* grid,
+                         const PageLayout* pages) {
   AtlasReport r;
   r.vertices = static_cast<int64_t>(mesh.positions.size());
   r.uvVertices = static_cast<int64_t>(mesh.uvs.size());
@@ -239,7 +259,7 @@ AtlasReport analyzeAtlas(const TexturedMesh& mesh, const Atlas& atlas, const Tex
     r.chartFaceCounts.push_back(static_cast<int64_t>(c.faces.size()));
     r.chartUvAreas.push_back(c.uvArea);
   }
-  meshIssues(mesh, atlas, r);
+  meshIssues(mesh, atlas, pages, r);
   if (grid) {
     r.texels = texelStats(*grid);
     texelIssues(*grid, *r.texels, r);

@@ -38,10 +38,27 @@ nlohmann::json texturesJson(const TexturedMesh& mesh) {
   return list;
 }
 
+/// {"baseColor": {"udim": bool, "pages": [{name, file, width, height, faces}], "problems": [...]}}
+nlohmann::json pagesJson(const std::vector<SlotPages>& slots) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const SlotPages& s : slots) {
+    nlohmann::json pages = nlohmann::json::array();
+    for (const TexturePage& page : s.layout.pages)
+      pages.push_back({{"name", page.name},
+                       {"file", page.path.empty() ? nlohmann::json(nullptr)
+                                                  : nlohmann::json(page.path.string())},
+                       {"width", page.width},
+                       {"height", page.height},
+                       {"faces", page.faces}});
+    j[s.slot] = {{"udim", s.layout.udim}, {"pages", pages}, {"problems", s.problems}};
+  }
+  return j;
+}
+
 }  // namespace
 
 std::string atlasReportJson(const AtlasReport& r, const TexturedMesh& mesh,
-                            const std::string& meshName) {
+                            const std::vector<SlotPages>& pages, const std::string& meshName) {
   nlohmann::json j;
   j["mesh"] = meshName;
   j["vertices"] = r.vertices;
@@ -59,6 +76,7 @@ std::string atlasReportJson(const AtlasReport& r, const TexturedMesh& mesh,
   if (r.texels) j["texels"] = texelsJson(*r.texels);
   j["textures"] = texturesJson(mesh);
   j["missing_files"] = mesh.missingFiles;
+  j["pages"] = pagesJson(pages);
   return j.dump(2);
 }
 

@@ -24,6 +24,11 @@ std::vector<const TextureRef*> slotTextures(const TexturedMesh& mesh, const std:
   return refs;
 }
 
+/// The depth of the PNG a glTF copy embeds for an image in `format` (writeGltfWithTexture).
+PixelFormat embeddedPngFormat(PixelFormat format) {
+  return format == PixelFormat::UInt8 ? PixelFormat::UInt8 : PixelFormat::UInt16;
+}
+
 /// How a message names a texture: where the file names it, else its file.
 std::string describe(const TextureRef& ref) {
   if (!ref.origin.empty()) return ref.origin;
@@ -110,9 +115,31 @@ WrittenTexture writeMeshTexture(const std::filesystem::path& out, const Textured
                          : writeGltfWithTextures(
                                mesh.sourcePath, out, slot,
                                {{refs.front(), [&]() -> const Image& { return image; }}}, format);
-  // The embedded PNG's depth (writeGltfWithTexture).
-  written.stored = format.value_or(image.format) == PixelFormat::UInt8 ? PixelFormat::UInt8
-                                                                       : PixelFormat::UInt16;
+  written.stored = embeddedPngFormat(format.value_or(image.format));
+  return written;
+}
+
+WrittenTexture writeGltfTexturePages(const std::filesystem::path& out, const TexturedMesh& mesh,
+                                     const PageLayout& layout, const Image& image,
+                                     std::optional<PixelFormat> format) {
+  requireGltfSource(out, mesh.sourcePath);
+  if (layout.udim)
+    throw UnsupportedError("cannot write " + out.string() + ": its " + layout.slot +
+                           " texture is UDIM tiles, which glTF has no way to name; write images "
+                           "(--out NAME.<UDIM>.png)");
+  Image page;  // the page being written: one in memory at a time
+  std::vector<GltfImageReplacement> replacements;
+  for (size_t p = 0; p < layout.pages.size(); ++p) {
+    const int texture = layout.pages[p].texture;
+    if (texture < 0 || static_cast<size_t>(texture) >= mesh.textures.size())
+      throw InvalidInputError("cannot write " + out.string() + ": page '" + layout.pages[p].name +
+                              "' comes from no image of " + mesh.sourcePath.string());
+    auto cut = [&, p]() -> const Image& { return page = pageImage(layout, image, p); };
+    replacements.push_back({&mesh.textures[static_cast<size_t>(texture)], cut});
+  }
+  WrittenTexture written;
+  written.warnings = writeGltfWithTextures(mesh.sourcePath, out, layout.slot, replacements, format);
+  written.stored = embeddedPngFormat(format.value_or(image.format));
   return written;
 }
 

@@ -101,6 +101,29 @@ TEST(Atlas, ReportFindsDegenerateFlippedAndOutsideUvs) {
   EXPECT_EQ(idsOf("flipped-uv-triangles"), std::vector<int64_t>{2});
 }
 
+TEST(Atlas, UvsOfUdimTilesAreOutsideOnlyWhenTheyLeaveTheirTile) {
+  // Two triangles in UDIM tiles 1002 (u in [1, 2]) and 1011 (v in [1, 2]); the second reaches
+  // 0.1 past its tile's top.
+  TexturedMesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
+  m.uvs = {{1.2, 0.2}, {1.8, 0.2}, {1.2, 0.8}, {0.2, 1.2}, {0.8, 1.2}, {0.2, 2.1}};
+  m.triangles = {{0, 1, 2}, {3, 4, 5}};
+  m.uvTriangles = m.triangles;
+  PageLayout pages;
+  pages.pages.resize(2);
+  pages.pages[0].tileU = 1;
+  pages.pages[1].tileV = 1;
+  pages.facePage = {0, 1};
+  auto outside = [&](const PageLayout* layout) {
+    for (const AtlasIssue& issue : analyzeAtlas(m, buildAtlas(m), nullptr, layout).issues)
+      if (issue.kind == "uvs-outside-unit-square") return issue.ids;
+    return std::vector<int64_t>{};
+  };
+  EXPECT_EQ(outside(&pages), std::vector<int64_t>{5});
+  // The same UVs against the unit square: all six are outside.
+  EXPECT_EQ(outside(nullptr).size(), 6u);
+}
+
 TEST(Atlas, BowTieVertexIsNonManifold) {
   TexturedMesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}};

@@ -18,6 +18,8 @@
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/procedural.h"
+#include "texgrad/io/texture_pages.h"
+#include "two_material_gltf.h"
 
 namespace texgrad::test {
 namespace {
@@ -150,7 +152,11 @@ TEST(CliPages, UdimTilesAreListedProcessedAndAMissingTileNamed) {
   writeImage(dir / "t.1012.png", procedural::sampleTexture(64, 64));
   const CliResult info = runCli({"info", "tiles.obj", "--json"}, dir);
   ASSERT_EQ(info.status, 0) << info.err;
-  const auto pages = nlohmann::json::parse(info.out)["pages"]["baseColor"];
+  const nlohmann::json report = nlohmann::json::parse(info.out);
+  // The tiles' UVs lie in their tiles: none is outside (of its tile).
+  for (const nlohmann::json& issue : report["issues"])
+    EXPECT_NE(issue["kind"].get<std::string>(), "uvs-outside-unit-square") << issue.dump();
+  const nlohmann::json pages = report["pages"]["baseColor"];
   EXPECT_TRUE(pages["udim"].get<bool>());
   ASSERT_EQ(pages["pages"].size(), 4u);
   EXPECT_EQ(pages["pages"][3]["name"], "1012");
@@ -184,6 +190,54 @@ TEST(CliPages, UdimTilesAreListedProcessedAndAMissingTileNamed) {
   const CliResult gltf = runCli({"filter", "tiles.obj", "--out", "out.glb", "-q"}, dir);
   EXPECT_EQ(gltf.status, 1);
   EXPECT_EQ(lineCount(gltf.err), 1) << gltf.err;
+  std::filesystem::remove_all(dir);
+}
+
+/// The embedded image of `ref` (a glTF copy texgrad wrote embeds every image).
+Image embeddedImage(const TextureRef& ref) {
+  EXPECT_TRUE(ref.path.empty()) << ref.path;
+  return readImageFromMemory(ref.embedded, "embedded " + ref.slot);
+}
+
+TEST(CliPages, GltfOutputReplacesTheImageOfEveryMaterialPage) {
+  // Two base-colour images (materials 0 | 1 and 2) are two pages: a glTF --out gets each page
+  // in place of the image it came from, the same texels the image output writes for that page;
+  // the normal image stays as it was.
+  const auto dir = tempDir("cli_pages_gltf");
+  TwoMaterialGltf fixture;
+  fixture.everyMaterial = true;
+  const TexturedMesh source = readMesh(fixture.write(dir, "two"));
+  const PageLayout layout = findTexturePages(source);
+  ASSERT_EQ(layout.pages.size(), 2u);
+  for (const char* out : {"out.gltf", "out.png"}) {
+    const CliResult run = runCli({"filter", "two.gltf", "--out", out, "--beta", "0.3", "-q"}, dir);
+    ASSERT_EQ(run.status, 0) << out << ": " << run.err;
+  }
+  const TexturedMesh written = readMesh(dir / "out.gltf");
+  ASSERT_EQ(written.textures.size(), source.textures.size());
+  size_t replaced = 0, kept = 0;
+  for (const TextureRef& ref : written.textures) {
+    const Image picture = embeddedImage(ref);
+    size_t same = source.textures.size();  // the source image the written one stands for
+    for (size_t t = 0; t < source.textures.size(); ++t)
+      if (source.textures[t].slot == ref.slot && source.textures[t].materials == ref.materials)
+        same = t;
+    ASSERT_LT(same, source.textures.size()) << ref.slot;
+    const Image before = readImage(source.textures[same].path);
+    for (size_t p = 0; p < layout.pages.size(); ++p) {
+      if (ref.slot != "baseColor" || layout.pages[p].texture != static_cast<int>(same)) continue;
+      const Image page = readImage(pageOutputPath(dir / "out.png", layout, p));
+      EXPECT_EQ(picture.pixels, page.pixels) << layout.pages[p].name;
+      EXPECT_NE(picture.pixels, before.pixels) << "the filter left page " << p << " unchanged";
+      ++replaced;
+    }
+    if (ref.slot != "baseColor") {
+      EXPECT_EQ(picture.pixels, before.pixels) << ref.slot;
+      ++kept;
+    }
+  }
+  EXPECT_EQ(replaced, 2u);
+  EXPECT_EQ(kept, 1u);
   std::filesystem::remove_all(dir);
 }
 

@@ -5,7 +5,9 @@
 // copy leaves that texture out. The unmoved BoomBox source must fail validation (the missing
 // file is reported), which shows the check sees a dangling URI. A two-material asset (two
 // primitives, two base-colour images, gltf_write_pages) validates, and so do its .gltf and .glb
-// write-backs replacing both images at once, after the move.
+// write-backs replacing both images at once, after the move; so do the CLI's .gltf and .glb
+// write-backs of that asset with a material on every primitive (`texgrad filter`: its two
+// base-colour images are two texture pages, each replaced by its filtered page).
 // Environment: TEXGRAD_CLI, TEXGRAD_WRITE_PAGES, TEXGRAD_SHARED_DATA, TEXGRAD_VALIDATOR_OUT (a
 // scratch folder).
 import { spawnSync } from "node:child_process";
@@ -96,6 +98,12 @@ if (pages.status === 0) {
         `the two-material source has ${fixture.issues.numErrors} validation errors`);
   for (const name of ["pages.gltf", "pages.glb"])
     await expectValidAfterMove(path.join(pagesDir, name), path.join(moved, "pages"));
+  const every = path.join(pagesDir, "source", "every.gltf");
+  for (const name of ["cli-pages.gltf", "cli-pages.glb"]) {
+    const run = texgrad(["filter", every, "--beta", "0.3", "--quiet", "-o", name], written);
+    check(run.status === 0 && run.err === "", `filter to ${name}: status ${run.status}: ${run.err}`);
+    if (run.status === 0) await expectValidAfterMove(path.join(written, name), moved);
+  }
 }
 
 if (failures > 0) {

@@ -1,7 +1,8 @@
 // For CTest GltfOutputsValidate: writes the two-material fixture
 // (tests/support/two_material_gltf.h) into OUT/source and its write-back with both base-colour
-// images replaced at once (writeGltfWithTextures) as OUT/pages.gltf and OUT/pages.glb. Usage:
-// gltf_write_pages OUT
+// images replaced at once (writeGltfWithTextures) as OUT/pages.gltf and OUT/pages.glb, and the
+// fixture with a material on every primitive as OUT/source/every.gltf (for the CLI's write-back
+// of two texture pages). Usage: gltf_write_pages OUT
 #include <exception>
 #include <filesystem>
 #include <iostream>
@@ -32,6 +33,9 @@ int main(int argc, char** argv) {
         const texgrad::Image& picture = pictures[next++];
         replacements.push_back({&ref, [&picture]() -> const texgrad::Image& { return picture; }});
       }
+    texgrad::test::TwoMaterialGltf every;
+    every.everyMaterial = true;
+    every.write(source, "every");
     for (const char* name : {"pages.gltf", "pages.glb"})
       texgrad::writeGltfWithTextures(mesh.sourcePath, out / name, "baseColor", replacements);
     std::cout << replacements.size() << " base-colour images replaced\n";

@@ -17,6 +17,7 @@
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/mesh_texture.h"
+#include "texgrad/io/texture_pages.h"
 #include "two_material_gltf.h"
 
 namespace texgrad {
@@ -96,6 +97,24 @@ TEST(GltfPages, ReaderFillsMaterialsFacesImagesAndSamplers) {
   ASSERT_EQ(normal.size(), 1u);
   EXPECT_EQ(normal[0]->materials, (std::vector<int32_t>{0}));
   EXPECT_EQ(normal[0]->path.filename(), "two_2.png");
+}
+
+TEST(GltfPages, UdimPagesHaveNoGltfForm) {
+  // The same pages called UDIM tiles: refused in one line, nothing written.
+  const fs::path dir = test::tempDir("gltf_pages_udim");
+  test::TwoMaterialGltf asset;
+  asset.everyMaterial = true;
+  const TexturedMesh mesh = readMesh(asset.write(dir, "two"));
+  PageLayout layout = findTexturePages(mesh);
+  readPageSizes(layout, mesh);
+  const Image image = readTexturePages(layout, mesh);
+  layout.udim = true;
+  const std::string message = pagesErrorOf<UnsupportedError>(
+      [&] { writeGltfTexturePages(dir / "u.glb", mesh, layout, image); });
+  EXPECT_NE(message.find("UDIM tiles"), std::string::npos) << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir / "u.glb"));
+  fs::remove_all(dir);
 }
 
 TEST(GltfPages, UnknownWrapModeIsOneLineNamingTheSampler) {

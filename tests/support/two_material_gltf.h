@@ -39,9 +39,11 @@ inline Image fixtureImage(int seed) {
 /// 0 "red" (baseColor image 0, CLAMP_TO_EDGE x MIRRORED_REPEAT sampler; normal image 2),
 /// 1 unnamed (baseColor image 1, no sampler), 2 "green" (baseColor image 1 again, through another
 /// texture with a MIRRORED_REPEAT x CLAMP_TO_EDGE sampler). Primitives 0, 1, 2 use materials
-/// 0, 1, 2; primitive 3 has none. Images are PNG files beside the .gltf, the buffer a .bin.
+/// 0, 1, 2; primitive 3 has none (or material 0 with everyMaterial). Images are PNG files beside
+/// the .gltf, the buffer a .bin.
 struct TwoMaterialGltf {
-  bool secondUvSet = true;  ///< false: primitive 2 lacks TEXCOORD_1
+  bool secondUvSet = true;     ///< false: primitive 2 lacks TEXCOORD_1
+  bool everyMaterial = false;  ///< true: primitive 3 uses material 0, so every face has an image
   static constexpr int kPrimitives = 4;
   static constexpr int kCorners = 4;
 
@@ -78,10 +80,11 @@ struct TwoMaterialGltf {
                    R"(,"componentType":5126,"count":4,"type":"VEC3","min":[)" + std::to_string(p) +
                    R"(,0,0],"max":[)" + std::to_string(p + 1) + R"(,1,0]},)";
       const bool uv1 = secondUvSet || p != 2;
-      primitives += std::string(p == 0 ? "" : ",") + R"({"attributes":{"POSITION":)" +
-                    std::to_string(p) + R"(,"TEXCOORD_0":4)" + (uv1 ? R"(,"TEXCOORD_1":5)" : "") +
-                    R"(},"indices":6)" +
-                    (p < 3 ? R"(,"material":)" + std::to_string(p) : std::string()) + "}";
+      primitives +=
+          std::string(p == 0 ? "" : ",") + R"({"attributes":{"POSITION":)" + std::to_string(p) +
+          R"(,"TEXCOORD_0":4)" + (uv1 ? R"(,"TEXCOORD_1":5)" : "") + R"(},"indices":6)" +
+          (p < 3 || everyMaterial ? R"(,"material":)" + std::to_string(p % 3) : std::string()) +
+          "}";
     }
     const std::string json = R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],
   "nodes":[{"mesh":0}],

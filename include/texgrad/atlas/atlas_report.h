@@ -7,6 +7,7 @@
 
 #include "texgrad/atlas/atlas.h"
 #include "texgrad/atlas/texel_grid.h"
+#include "texgrad/io/texture_pages.h"
 #include "texgrad/io/textured_mesh.h"
 
 namespace texgrad {
@@ -41,8 +42,9 @@ struct AtlasReport {
   std::optional<TexelStats> texels;
 };
 
-/// Analyses mesh and atlas; if a resolution is given, also the texel grid statistics.
+/// Analyses mesh and atlas; if a resolution is given, also the texel grid statistics. With the
+/// texture's `pages` (holding every face), a UV is outside when it leaves its face's UDIM tile.
 AtlasReport analyzeAtlas(const TexturedMesh& mesh, const Atlas& atlas,
-                         const TexelGrid* grid = nullptr);
+                         const TexelGrid* grid = nullptr, const PageLayout* pages = nullptr);
 
 }  // namespace texgrad

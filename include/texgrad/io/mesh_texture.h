@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "texgrad/io/image.h"
+#include "texgrad/io/texture_pages.h"
 #include "texgrad/io/textured_mesh.h"
 
 namespace texgrad {
@@ -39,6 +40,16 @@ struct WrittenTexture {
 WrittenTexture writeMeshTexture(const std::filesystem::path& out, const TexturedMesh& mesh,
                                 const Image& image, const std::string& slot = "baseColor",
                                 std::optional<PixelFormat> format = std::nullopt);
+
+/// writeMeshTexture for a texture over several pages into a glTF copy `out` of the mesh's source
+/// asset: `image` is the layout image of `layout` (one page per image of the mesh's layout.slot
+/// materials, findTexturePages), and each page's picture (pageImage, one page in memory at a
+/// time) replaces the image it came from (TexturePage::texture), by writeGltfWithTextures; other
+/// images are kept. Throws UnsupportedError for UDIM pages (glTF has no UDIM tiles),
+/// InvalidInputError if the mesh was not read from glTF; otherwise as writeGltfWithTextures.
+WrittenTexture writeGltfTexturePages(const std::filesystem::path& out, const TexturedMesh& mesh,
+                                     const PageLayout& layout, const Image& image,
+                                     std::optional<PixelFormat> format = std::nullopt);
 
 /// Checks before any work that writeMeshTexture can write `out` for a mesh read from
 /// `meshSource` (empty for a procedural mesh): checkImageOutput for an image; for a glTF output,
