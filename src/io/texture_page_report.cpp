@@ -5,7 +5,6 @@
 #include <tuple>
 
 #include "texgrad/core/error.h"
-#include "texgrad/io/image_io.h"
 
 namespace texgrad {
 
@@ -29,8 +28,7 @@ std::vector<SlotPages> reportTexturePages(const TexturedMesh& mesh,
     for (size_t p = 0; p < pages.layout.pages.size(); ++p) {
       TexturePage& page = pages.layout.pages[p];
       try {
-        requirePageImage(pages.layout, mesh, p);
-        if (!page.path.empty()) std::tie(page.width, page.height) = readImageSize(page.path);
+        std::tie(page.width, page.height) = readPageSize(pages.layout, mesh, p);
       } catch (const Error& e) {
         pages.problems.push_back(e.what());
       }

@@ -320,18 +320,16 @@ void copyIntoLayout(const PageLayout& layout, size_t p, const Image& image, Imag
 
 }  // namespace
 
+std::pair<int, int> readPageSize(const PageLayout& layout, const TexturedMesh& mesh, size_t page) {
+  requirePageImage(layout, mesh, page);
+  if (!layout.pages[page].path.empty()) return readImageSize(layout.pages[page].path);
+  const Image image = readPage(layout, mesh, page);  // embedded: no header-only reader
+  return {image.width, image.height};
+}
+
 void readPageSizes(PageLayout& layout, const TexturedMesh& mesh) {
-  for (size_t p = 0; p < layout.pages.size(); ++p) {
-    TexturePage& page = layout.pages[p];
-    requirePageImage(layout, mesh, p);
-    if (!page.path.empty()) {
-      std::tie(page.width, page.height) = readImageSize(page.path);
-    } else {
-      const Image image = readPage(layout, mesh, p);
-      page.width = image.width;
-      page.height = image.height;
-    }
-  }
+  for (size_t p = 0; p < layout.pages.size(); ++p)
+    std::tie(layout.pages[p].width, layout.pages[p].height) = readPageSize(layout, mesh, p);
   arrangePages(layout);
 }
 

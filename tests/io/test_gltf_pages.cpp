@@ -17,6 +17,7 @@
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/mesh_texture.h"
+#include "texgrad/io/texture_page_report.h"
 #include "texgrad/io/texture_pages.h"
 #include "two_material_gltf.h"
 
@@ -208,6 +209,25 @@ TEST(GltfPages, WriteBackReplacesBothImagesAndKeepsTheRest) {
   EXPECT_TRUE(
       sameLevels(decodePage(*pageWithMaterials(back, "baseColor", {0})), test::fixtureImage(0)));
   EXPECT_TRUE(sameLevels(decodePage(*pageWithMaterials(back, "baseColor", {1, 2})), newShared));
+}
+
+TEST(GltfPages, ReportGivesTheSizeOfEmbeddedPages) {
+  const fs::path dir = test::tempDir("gltf_pages_report");
+  test::TwoMaterialGltf fixture;
+  fixture.everyMaterial = true;  // every face on a page, so the slot has a layout
+  const TexturedMesh mesh = readMesh(fixture.write(dir, "two"));
+  const fs::path out = dir / "embedded.glb";
+  writeGltfWithTextures(mesh.sourcePath, out, "baseColor", {});
+  const std::vector<SlotPages> slots = reportTexturePages(readMesh(out));
+  const PageLayout* layout = slotLayout(slots, "baseColor");
+  ASSERT_NE(layout, nullptr);
+  ASSERT_EQ(layout->pages.size(), 2u);
+  const Image picture = test::fixtureImage(0);
+  for (const TexturePage& page : layout->pages) {
+    EXPECT_TRUE(page.path.empty()) << page.name;  // embedded
+    EXPECT_EQ(page.width, picture.width) << page.name;
+    EXPECT_EQ(page.height, picture.height) << page.name;
+  }
 }
 
 TEST(GltfPages, WriteBackRefusesAmbiguousReplacements) {

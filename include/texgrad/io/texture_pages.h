@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "texgrad/io/image.h"
@@ -100,6 +101,10 @@ int pageBoundary(const PageLayout& layout, size_t page);
 /// Throws IoError, naming the file, the page and the faces that need it, if page `page`'s image
 /// file is missing (embedded pages never are).
 void requirePageImage(const PageLayout& layout, const TexturedMesh& mesh, size_t page);
+
+/// The size of page `page`'s image: its file's header, or the embedded image decoded. Throws
+/// as requirePageImage does, or InvalidInputError if the image cannot be decoded.
+std::pair<int, int> readPageSize(const PageLayout& layout, const TexturedMesh& mesh, size_t page);
 
 /// Reads each page image's size (its header, or the embedded bytes) and arranges the pages.
 /// Throws IoError naming the missing file and the faces that need it.
