@@ -2,7 +2,8 @@
 // the same image twice) filters to what the one-texture original gives, one image per page;
 // UDIM tiles by the TEXTURE argument's token; `info` lists the pages; a missing page is named;
 // a chart straddling two UDIM tiles stays continuous across their border; `texture` from photos
-// over UDIM tiles gives, tile by tile, what it gives on the single image of the same charts.
+// over UDIM tiles gives, tile by tile, what it gives on the single image of the same charts, and
+// so do `project` (each view written per tile) and `stitch` (reading them back per tile).
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -445,6 +446,24 @@ TEST(CliPages, ProjectAndStitchOverUdimTilesMatchTheSingleImage) {
       readImage(dir / "s.exr"));
   EXPECT_GT(range, 0.1);  // the photos were stitched into it
   EXPECT_LT(worst, kPagesCliTolerance);
+  // In a --partials pattern %04d is the view number, not a UDIM token: the views renamed
+  // q-0000.1001.png, ... stitch to the same tiles.
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "pt")) {
+    const std::string name = entry.path().filename().string();  // partial-NN.TILE.png
+    const std::string view = name.substr(name.find('-') + 1);
+    std::filesystem::copy_file(entry.path(),
+                               dir / "pt" / ((name[0] == 'p' ? "q-00" : "r-00") + view));
+  }
+  std::vector<std::string> renamed = stitchTiles;
+  renamed[3] = "pt/q-%04d.png";
+  renamed[5] = "pt/r-%04d.png";
+  renamed[7] = "u.<UDIM>.exr";
+  const CliResult c = runCli(renamed, dir);
+  ASSERT_EQ(c.status, 0) << c.err;
+  for (const char* tile : {"1001", "1002", "1011", "1012"})
+    EXPECT_EQ(readImage(dir / ("u." + std::string(tile) + ".exr")).pixels,
+              readImage(dir / ("t." + std::string(tile) + ".exr")).pixels)
+        << tile;
   // A missing page of one view's partial is one line naming its file.
   std::filesystem::remove(dir / "pt" / "partial-01.1012.png");
   const CliResult missing = runCli(stitchTiles, dir);
