@@ -61,16 +61,6 @@ void requireSinglePage(const PageLayout& layout, const std::string& option,
                            " pages (UDIM tiles or materials); " + instead);
 }
 
-void requireOnePageMesh(const TexturedMesh& mesh, const std::string& command) {
-  const PageLayout layout = findTexturePages(mesh, "baseColor");
-  if (layout.pages.size() > 1)
-    throw UnsupportedError("`texgrad " + command + "` does not support textures over several " +
-                           "images yet, and " + mesh.sourcePath.string() + "'s baseColor " +
-                           "texture has " + std::to_string(layout.pages.size()) +
-                           " pages (UDIM tiles or materials); filter, seams, dilate, geodesic, "
-                           "lic, react and texture do");
-}
-
 void checkPagedOutputArgs(const std::string& out, const PageLayout& layout,
                           const std::string& bitDepth) {
   if (layout.single()) return;  // checkTextureOutputArgs checked `out` itself

@@ -23,6 +23,12 @@ inline constexpr const char* kPagedOutputHelp =
 inline constexpr const char* kPagedInputHelp =
     "; a name with <UDIM> or %04d (tex.<UDIM>.png) reads one image per UDIM tile the UVs use";
 
+/// How `stitch`'s texture-space inputs over several pages are named, appended to their help.
+inline constexpr const char* kPagedInputsHelp =
+    ". A texture over several pages (UDIM tiles, or one image per material) reads one image per "
+    "page, named as --out names them (a <UDIM> replaced by the tile, else the page name before "
+    "the extension: comp.1001.png, comp.MATERIAL.png); the same for --segments and --lock";
+
 /// A mesh placed on the pages of its texture, and the layout image when one was read.
 struct PagedTexture {
   TexturedMesh mesh;  ///< UVs in the layout's UV space (the mesh itself for one page)
@@ -48,10 +54,6 @@ std::optional<PagedTexture> placeOnPagesOfImages(const TexturedMesh& mesh);
 /// the texture has several pages.
 void requireSinglePage(const PageLayout& layout, const std::string& option,
                        const std::string& instead);
-
-/// Refuses, naming `command`, a mesh whose base-colour texture has several pages, for the
-/// commands that do not place meshes on pages yet (their UVs would overlap in one image).
-void requireOnePageMesh(const TexturedMesh& mesh, const std::string& command);
 
 /// Checks, before the work, that every page of `out` can be written: checkImageOutput for each
 /// page's file; a glTF output of UDIM tiles is refused (one line), of material pages accepted.

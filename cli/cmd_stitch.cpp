@@ -22,9 +22,11 @@ struct StitchArgs {
   std::string wrap = "auto";
 };
 
-/// Expands a printf pattern with one integer (e.g. 'texels-%02d.png') for 0, 1, ... while files
-/// exist.
-std::vector<std::string> expandPattern(const std::string& pattern, const std::string& flag) {
+/// Expands a printf pattern with one integer, the view number (e.g. 'texels-%02d.png'), for 0,
+/// 1, ... while the view's file exists (over several pages: its first page's file, named by
+/// pageOutputPath's rule after the view number is put in, so a %04d is never a UDIM token here).
+std::vector<std::string> expandPattern(const std::string& pattern, const std::string& flag,
+                                       const PageLayout& layout) {
   const size_t percent = pattern.find('%');
   if (percent == std::string::npos || pattern.find('%', percent + 1) != std::string::npos ||
       pattern.find_first_of("di", percent) == std::string::npos)
@@ -34,7 +36,7 @@ std::vector<std::string> expandPattern(const std::string& pattern, const std::st
   for (int k = 0; k < 1000; ++k) {
     std::vector<char> buffer(pattern.size() + 32);
     std::snprintf(buffer.data(), buffer.size(), pattern.c_str(), k);
-    if (!pathExists(buffer.data())) {
+    if (!pathExists(pageOutputPath(buffer.data(), layout, 0))) {
       if (k == 0) continue;  // numbering may start at 1
       break;
     }
@@ -67,36 +69,46 @@ void runStitch(StitchArgs args) {
   const ProgressCallback progress = progressDisplay(args.report);
   reportProgress(progress, "read", 0.0);
   TexturedMesh mesh = wrapMesh(loadMesh(args.mesh, args.read), args.wrap, "baseColor");
-  requireOnePageMesh(mesh, "stitch");
+  // Over several pages (UDIM tiles, one image per material) every input is one image per page,
+  // read into the pages' layout, where the sources are stitched at once (seams between pages
+  // too); the page sizes are those of the first input's pages.
+  PageLayout layout = findTexturePages(mesh, "baseColor");
+  std::vector<std::string> partialFiles, confidenceFiles;
+  if (compositeMode) {
+    if (args.segments.empty()) throw InvalidInputError("--composite needs --segments MASK");
+  } else {
+    if (args.confidence.empty()) throw InvalidInputError("--partials needs --confidence PATTERN");
+    partialFiles = expandPattern(args.partials, "--partials", layout);
+    confidenceFiles = expandPattern(args.confidence, "--confidence", layout);
+  }
+  readPagedImageSizes(layout, compositeMode ? args.composite : partialFiles.front());
+  checkPagedOutputArgs(args.out, layout, args.bitDepth);
+  if (!layout.single()) mesh = placeOnPages(mesh, layout);
   Image composite, segments;
   std::vector<Image> partials, confidences;
   if (compositeMode) {
-    if (args.segments.empty()) throw InvalidInputError("--composite needs --segments MASK");
-    composite = readImage(args.composite);
-    segments = readImage(args.segments);
+    composite = readPagedImage(layout, args.composite);
+    segments = readPagedImage(layout, args.segments, PageGapFill::Zero);  // gaps: no source
   } else {
-    if (args.confidence.empty()) throw InvalidInputError("--partials needs --confidence PATTERN");
-    for (const std::string& f : expandPattern(args.partials, "--partials"))
-      partials.push_back(readImage(f));
-    for (const std::string& f : expandPattern(args.confidence, "--confidence"))
-      confidences.push_back(readImage(f));
+    for (const std::string& f : partialFiles) partials.push_back(readPagedImage(layout, f));
+    for (const std::string& f : confidenceFiles) confidences.push_back(readPagedImage(layout, f));
   }
-  if (!args.lock.empty()) args.options.lock = readImage(args.lock);
-  const Image& first = compositeMode ? composite : partials.front();
+  if (!args.lock.empty()) args.options.lock = readPagedImage(layout, args.lock);
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
-  const TexelDomain domain(std::move(mesh), first.width, first.height, {}, progress);
+  const TexelDomain domain(std::move(mesh), layout.width, layout.height, {}, progress);
   timer.lap("operators");
   const StitchResult result =
       compositeMode ? stitchComposite(domain, composite, segments, args.options, progress)
                     : stitchPartials(domain, partials, confidences, args.options, progress);
   timer.lap("solve");
   const PixelFormat stored = runStage(progress, "write", [&] {
-    return writeTextureOutput(args.out, domain.mesh(), result.image, "baseColor", args.bitDepth,
-                              args.report.quiet);
+    return writePagedTexture(args.out, domain.mesh(), layout, result.image, "baseColor",
+                             args.bitDepth, args.report.quiet);
   });
   timer.lap("write");
-  printWritten(args.report.quiet, args.out, result.image, stored, domain.unknowns(), timer.total());
+  printWrittenPages(args.report.quiet, args.out, layout, result.image, stored, domain.unknowns(),
+                    timer.total());
   if (args.report.timings) timer.print();
   if (args.report.json)
     printJson({{"command", "stitch"},
@@ -124,16 +136,23 @@ void addStitchCommand(CLI::App& app) {
       "textures with confidence maps.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
-  cmd->add_option("--composite", args->composite, "Composite texture (each texel from one source)");
+  cmd->add_option("--composite", args->composite,
+                  std::string("Composite texture (each texel from one source)") + kPagedInputsHelp);
   cmd->add_option("--segments", args->segments,
-                  "Source mask for --composite: one colour per source, black = no source");
+                  "Source mask for --composite: one colour per source, black = no source (texels "
+                  "between pages belong to none)");
   cmd->add_option("--partials", args->partials,
-                  "printf pattern of the partial textures, e.g. 'texels-%02d.png'");
+                  "printf pattern of the partial textures, e.g. 'texels-%02d.png': its one integer "
+                  "field is the view number (%04d too); over several pages, view k's page is the "
+                  "expanded name with <UDIM> replaced by the tile, else with the page name before "
+                  "the extension (texels-00.1001.png), as `texgrad project` writes them");
   cmd->add_option("--confidence", args->confidence,
                   "printf pattern of the confidence maps (0 = unseen, 1 = best), one per partial");
   cmd->add_option("--lock", args->lock,
                   "Mask (white = locked): these texels keep their input value exactly");
-  cmd->add_option("--out,-o", args->out, "Output image, or .gltf/.glb for a glTF copy")->required();
+  cmd->add_option("--out,-o", args->out,
+                  std::string("Output image, or .gltf/.glb for a glTF copy") + kPagedOutputHelp)
+      ->required();
   cmd->add_option("--alpha", args->options.alpha,
                   "Screening weight: larger keeps the sources' absolute colours (paper 1e2)")
       ->default_val(1e2)

@@ -294,8 +294,10 @@ Image readPage(const PageLayout& layout, const TexturedMesh& mesh, size_t p) {
       mesh.sourcePath.string() + " (embedded " + layout.slot + " texture " + page.name + ")");
 }
 
-/// Copies `image` (page `p`) into the layout image with clamp-to-edge values around it.
-void copyIntoLayout(const PageLayout& layout, size_t p, const Image& image, Image& out) {
+/// Copies `image` (page `p`) into the layout image with clamp-to-edge values (or zeros, `gap`)
+/// around it.
+void copyIntoLayout(const PageLayout& layout, size_t p, const Image& image, Image& out,
+                    PageGapFill gap = PageGapFill::ClampToEdge) {
   const TexturePage& page = layout.pages[p];
   if (image.width != page.width || image.height != page.height)
     throw InvalidInputError(describePage(page, layout.udim) + " is " + std::to_string(image.width) +
@@ -313,7 +315,9 @@ void copyIntoLayout(const PageLayout& layout, size_t p, const Image& image, Imag
     const int row = std::min(j, page.height - 1);
     for (int x = first; x < last; ++x) {
       const int column = std::clamp(x - page.offset, 0, page.width - 1);
-      for (int c = 0; c < out.channels; ++c) out.at(x, j, c) = image.at(column, row, c);
+      const bool outside = j != row || column != x - page.offset;
+      for (int c = 0; c < out.channels; ++c)
+        out.at(x, j, c) = outside && gap == PageGapFill::Zero ? 0.0f : image.at(column, row, c);
     }
   }
 }
@@ -374,6 +378,37 @@ Image readTexturePages(const PageLayout& layout, const TexturedMesh& mesh) {
     const Image page = readPage(layout, mesh, p);
     if (p == 0) out = Image(layout.width, layout.height, page.channels, page.format);
     copyIntoLayout(layout, p, page, out);
+  }
+  return out;
+}
+
+namespace {
+
+/// Page `p`'s file of the paged image `name`, throwing IoError in one line if it is missing.
+std::filesystem::path requirePagedFile(const PageLayout& layout, const std::filesystem::path& name,
+                                       size_t p) {
+  const std::filesystem::path path = pageOutputPath(name, layout, p);
+  if (!pathExists(path))
+    throw IoError("missing image '" + path.string() + "': " +
+                  describePage(layout.pages[p], layout.udim) + " of '" + name.string() + "'");
+  return path;
+}
+
+}  // namespace
+
+void readPagedImageSizes(PageLayout& layout, const std::filesystem::path& name) {
+  for (size_t p = 0; p < layout.pages.size(); ++p)
+    std::tie(layout.pages[p].width, layout.pages[p].height) =
+        readImageSize(requirePagedFile(layout, name, p));
+  arrangePages(layout);
+}
+
+Image readPagedImage(const PageLayout& layout, const std::filesystem::path& name, PageGapFill gap) {
+  Image out;
+  for (size_t p = 0; p < layout.pages.size(); ++p) {
+    const Image page = readImage(requirePagedFile(layout, name, p));
+    if (p == 0) out = Image(layout.width, layout.height, page.channels, page.format);
+    copyIntoLayout(layout, p, page, out, gap);
   }
   return out;
 }

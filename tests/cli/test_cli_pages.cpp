@@ -2,10 +2,12 @@
 // the same image twice) filters to what the one-texture original gives, one image per page;
 // UDIM tiles by the TEXTURE argument's token; `info` lists the pages; a missing page is named;
 // a chart straddling two UDIM tiles stays continuous across their border; `texture` from photos
-// over UDIM tiles gives, tile by tile, what it gives on the single image of the same charts.
+// over UDIM tiles gives, tile by tile, what it gives on the single image of the same charts, and
+// so do `project` (each view written per tile) and `stitch` (reading them back per tile).
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <random>
 
@@ -257,12 +259,12 @@ TEST(CliPages, InfoListsMaterialPages) {
       << info.out;
   EXPECT_NE(info.out.find("page m1: " + (dir / "b.png").string() + ", 48x16, "), std::string::npos)
       << info.out;
-  // A command that does not place meshes on pages yet refuses, rather than overlap the pages.
+  // stitch reads its texture-space inputs per page: a.png is not a.m0.png, named in one line.
   const CliResult stitch = runCli(
       {"stitch", "two.obj", "--composite", "a.png", "--segments", "a.png", "--out", "s.png"}, dir);
   EXPECT_EQ(stitch.status, 1);
   EXPECT_EQ(lineCount(stitch.err), 1) << stitch.err;
-  EXPECT_NE(stitch.err.find("2 pages"), std::string::npos) << stitch.err;
+  EXPECT_NE(stitch.err.find("a.m0.png"), std::string::npos) << stitch.err;
   std::filesystem::remove_all(dir);
 }
 
@@ -339,9 +341,12 @@ TEST(CliPages, AChartStraddlingTwoUdimTilesStaysContinuousAcrossTheirBorder) {
   std::filesystem::remove_all(dir);
 }
 
-TEST(CliPages, TextureFromPhotosOverUdimTilesMatchesTheSingleImage) {
-  const auto dir = tempDir("cli_pages_texture");
-  constexpr int kTileTexels = 128;  // the charts keep >= 3 texels from every tile border
+/// Texels per UDIM tile of the photo tests: the charts keep >= 3 texels from every tile border.
+constexpr int kTileTexels = 128;
+
+/// In `dir`: tiles.obj (tiledSphere on t.<UDIM>.png), single.obj (the same charts as the
+/// quadrants of one image), photos of a sample texture on it (images/) and cameras.json.
+void writeTiledPhotoScene(const std::filesystem::path& dir) {
   const TexturedMesh tiles = tiledSphere();
   TexturedMesh single = tiles;  // the 2 x 2 tiles as the quadrants of one image
   for (Eigen::Vector2d& uv : single.uvs) uv /= 2.0;
@@ -357,6 +362,32 @@ TEST(CliPages, TextureFromPhotosOverUdimTilesMatchesTheSingleImage) {
     writeImage(dir / "images" / capture.cameras[k].name, photo);
   }
   writeCameraJson(dir / "cameras.json", capture.cameras);
+}
+
+/// The largest difference between the 2 x 2 tiles `tiles` (NAME -> file) and the quadrants of
+/// `whole`, and the largest magnitude in `whole`.
+std::pair<double, double> tilesVersusQuadrants(const std::function<Image(const char*)>& tiles,
+                                               const Image& whole) {
+  double worst = 0.0, range = 0.0;
+  for (const auto& [name, k, l] : {std::tuple{"1001", 0, 0}, std::tuple{"1002", 1, 0},
+                                   std::tuple{"1011", 0, 1}, std::tuple{"1012", 1, 1}}) {
+    const Image tile = tiles(name);
+    EXPECT_EQ(tile.width, kTileTexels) << name;
+    if (tile.width != kTileTexels || tile.height != kTileTexels) return {1e30, 0.0};
+    for (int j = 0; j < kTileTexels; ++j)
+      for (int i = 0; i < kTileTexels; ++i)
+        for (int c = 0; c < tile.channels; ++c) {
+          const double w = whole.at(k * kTileTexels + i, l * kTileTexels + j, c);
+          worst = std::max(worst, std::abs(double(tile.at(i, j, c)) - w));
+          range = std::max(range, std::abs(w));
+        }
+  }
+  return {worst, range};
+}
+
+TEST(CliPages, TextureFromPhotosOverUdimTilesMatchesTheSingleImage) {
+  const auto dir = tempDir("cli_pages_texture");
+  writeTiledPhotoScene(dir);
   const std::vector<std::string> options{
       "--cameras", "cameras.json", "--images", "images", "--dilate-radius", "0", "--solver",
       "direct",    "--bit-depth",  "float",    "-q"};
@@ -368,22 +399,77 @@ TEST(CliPages, TextureFromPhotosOverUdimTilesMatchesTheSingleImage) {
   const CliResult a = runCli(paged, dir), b = runCli(one, dir);
   ASSERT_EQ(a.status, 0) << a.err;
   ASSERT_EQ(b.status, 0) << b.err;
-  const Image whole = readImage(dir / "s.exr");
-  double worst = 0.0, range = 0.0;
-  for (const auto& [name, k, l] : {std::tuple{"1001", 0, 0}, std::tuple{"1002", 1, 0},
-                                   std::tuple{"1011", 0, 1}, std::tuple{"1012", 1, 1}}) {
-    const Image tile = readImage(dir / ("t." + std::string(name) + ".exr"));
-    ASSERT_EQ(tile.width, kTileTexels) << name;
-    for (int j = 0; j < kTileTexels; ++j)
-      for (int i = 0; i < kTileTexels; ++i)
-        for (int c = 0; c < tile.channels; ++c) {
-          const double w = whole.at(k * kTileTexels + i, l * kTileTexels + j, c);
-          worst = std::max(worst, std::abs(double(tile.at(i, j, c)) - w));
-          range = std::max(range, std::abs(w));
-        }
-  }
+  const auto [worst, range] = tilesVersusQuadrants(
+      [&](const char* name) { return readImage(dir / ("t." + std::string(name) + ".exr")); },
+      readImage(dir / "s.exr"));
   EXPECT_GT(range, 0.1);  // the photos were stitched into it
   EXPECT_LT(worst, kPagesCliTolerance);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(CliPages, ProjectAndStitchOverUdimTilesMatchTheSingleImage) {
+  const auto dir = tempDir("cli_pages_stitch");
+  writeTiledPhotoScene(dir);
+  const std::vector<std::string> photos{"--cameras", "cameras.json", "--images", "images", "-q"};
+  std::vector<std::string> projectTiles{"project",   "tiles.obj", "-r", std::to_string(kTileTexels),
+                                        "--out-dir", "pt"},
+      projectOne{"project", "single.obj", "-r", std::to_string(2 * kTileTexels), "--out-dir", "ps"};
+  projectTiles.insert(projectTiles.end(), photos.begin(), photos.end());
+  projectOne.insert(projectOne.end(), photos.begin(), photos.end());
+  const CliResult pa = runCli(projectTiles, dir), pb = runCli(projectOne, dir);
+  ASSERT_EQ(pa.status, 0) << pa.err;
+  ASSERT_EQ(pb.status, 0) << pb.err;
+  // Each view's partial is written per tile: its tiles are the single image's quadrants.
+  const auto [partialWorst, partialRange] = tilesVersusQuadrants(
+      [&](const char* name) {
+        return readImage(dir / "pt" / ("partial-01." + std::string(name) + ".png"));
+      },
+      readImage(dir / "ps" / "partial-01.png"));
+  EXPECT_GT(partialRange, 0.1);
+  EXPECT_LT(partialWorst, kPagesCliTolerance);
+  const std::vector<std::string> solve{"--solver", "direct", "--bit-depth", "float", "-q"};
+  std::vector<std::string> stitchTiles{"stitch",       "tiles.obj",
+                                       "--partials",   "pt/partial-%02d.png",
+                                       "--confidence", "pt/confidence-%02d.png",
+                                       "--out",        "t.<UDIM>.exr"},
+      stitchOne{"stitch",       "single.obj",
+                "--partials",   "ps/partial-%02d.png",
+                "--confidence", "ps/confidence-%02d.png",
+                "--out",        "s.exr"};
+  stitchTiles.insert(stitchTiles.end(), solve.begin(), solve.end());
+  stitchOne.insert(stitchOne.end(), solve.begin(), solve.end());
+  const CliResult a = runCli(stitchTiles, dir), b = runCli(stitchOne, dir);
+  ASSERT_EQ(a.status, 0) << a.err;
+  ASSERT_EQ(b.status, 0) << b.err;
+  const auto [worst, range] = tilesVersusQuadrants(
+      [&](const char* name) { return readImage(dir / ("t." + std::string(name) + ".exr")); },
+      readImage(dir / "s.exr"));
+  EXPECT_GT(range, 0.1);  // the photos were stitched into it
+  EXPECT_LT(worst, kPagesCliTolerance);
+  // In a --partials pattern %04d is the view number, not a UDIM token: the views renamed
+  // q-0000.1001.png, ... stitch to the same tiles.
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "pt")) {
+    const std::string name = entry.path().filename().string();  // partial-NN.TILE.png
+    const std::string view = name.substr(name.find('-') + 1);
+    std::filesystem::copy_file(entry.path(),
+                               dir / "pt" / ((name[0] == 'p' ? "q-00" : "r-00") + view));
+  }
+  std::vector<std::string> renamed = stitchTiles;
+  renamed[3] = "pt/q-%04d.png";
+  renamed[5] = "pt/r-%04d.png";
+  renamed[7] = "u.<UDIM>.exr";
+  const CliResult c = runCli(renamed, dir);
+  ASSERT_EQ(c.status, 0) << c.err;
+  for (const char* tile : {"1001", "1002", "1011", "1012"})
+    EXPECT_EQ(readImage(dir / ("u." + std::string(tile) + ".exr")).pixels,
+              readImage(dir / ("t." + std::string(tile) + ".exr")).pixels)
+        << tile;
+  // A missing page of one view's partial is one line naming its file.
+  std::filesystem::remove(dir / "pt" / "partial-01.1012.png");
+  const CliResult missing = runCli(stitchTiles, dir);
+  EXPECT_EQ(missing.status, 1);
+  EXPECT_EQ(lineCount(missing.err), 1) << missing.err;
+  EXPECT_NE(missing.err.find("partial-01.1012.png"), std::string::npos) << missing.err;
   std::filesystem::remove_all(dir);
 }
 

@@ -263,5 +263,48 @@ TEST(TexturePages, ReadingEveryPageAndAMissingOneNamed) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(TexturePages, PagedImagesAreReadByTheirOutputNamesWithLabelGapsEmpty) {
+  const auto dir = test::tempDir("pages_paged_read");
+  PageLayout written = sizedLayout({{100, 50}, {30, 80}});
+  written.pages[0].name = "1001";
+  written.pages[1].name = "wood";
+  const std::vector<Image> pages{rampImage(100, 50, 1.0f), rampImage(30, 80, 1000.0f)};
+  const std::filesystem::path name = dir / "labels-03.exr";
+  for (size_t p = 0; p < pages.size(); ++p)
+    writeImage(pageOutputPath(name, written, p), pages[p], PixelFormat::Float);
+  PageLayout layout = written;
+  for (TexturePage& page : layout.pages) page.width = page.height = page.offset = 0;
+  readPagedImageSizes(layout, name);
+  for (size_t p = 0; p < pages.size(); ++p) {
+    EXPECT_EQ(layout.pages[p].width, written.pages[p].width) << p;
+    EXPECT_EQ(layout.pages[p].offset, written.pages[p].offset) << p;
+  }
+  EXPECT_EQ(readPagedImage(layout, name).pixels, composePages(layout, pages).pixels);
+  const Image labels = readPagedImage(layout, name, PageGapFill::Zero);
+  for (int j = 0; j < layout.height; ++j)
+    for (int x = 0; x < layout.width; ++x) {
+      bool inside = false;  // a texel of a page: its value; any other: no label
+      for (size_t p = 0; p < pages.size(); ++p) {
+        const TexturePage& page = layout.pages[p];
+        if (x < page.offset || x >= page.offset + page.width || j >= page.height) continue;
+        inside = true;
+        ASSERT_EQ(labels.at(x, j, 0), pages[p].at(x - page.offset, j, 0)) << x << "," << j;
+      }
+      if (!inside) {
+        ASSERT_EQ(labels.at(x, j, 0), 0.0f) << x << "," << j;
+      }
+    }
+  std::filesystem::remove(dir / "labels-03.wood.exr");
+  try {
+    (void)readPagedImage(layout, name);
+    FAIL() << "page 'wood' is missing";
+  } catch (const IoError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find((dir / "labels-03.wood.exr").string()), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace texgrad

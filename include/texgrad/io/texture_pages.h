@@ -125,6 +125,23 @@ Image composePages(const PageLayout& layout, const std::vector<Image>& pages);
 /// the faces that need it, InvalidInputError if pages have different channel counts.
 Image readTexturePages(const PageLayout& layout, const TexturedMesh& mesh);
 
+/// What the layout texels outside every page hold when paged images are read.
+enum class PageGapFill {
+  ClampToEdge,  ///< the clamp-to-edge value of the page owning the column (colours, weights)
+  Zero,         ///< zero (labels: a gap texel belongs to no source)
+};
+
+/// Sets every page's size from the header of its image named after `name` by pageOutputPath's
+/// rule (a `<UDIM>` token replaced by the tile, else the page name before the extension; a
+/// single() layout: `name` itself) and arranges the layout. Throws IoError naming a missing file.
+void readPagedImageSizes(PageLayout& layout, const std::filesystem::path& name);
+
+/// Reads the images named after `name` (pageOutputPath's rule: what writing a layout image to
+/// `name` wrote) into one layout image, one page at a time; the layout must be arranged. Throws
+/// IoError in one line naming a missing page file, InvalidInputError for a page of another size.
+Image readPagedImage(const PageLayout& layout, const std::filesystem::path& name,
+                     PageGapFill gap = PageGapFill::ClampToEdge);
+
 /// Page `page` cut out of the layout image `image`.
 Image pageImage(const PageLayout& layout, const Image& image, size_t page);
 
