@@ -134,32 +134,6 @@ py::dict atlasReport(const TexturedMesh& mesh, const py::object& resolution) {
   return py::module_::import("json").attr("loads")(json).cast<py::dict>();
 }
 
-PixelFormat formatOf(SampleType type) {
-  switch (type) {
-    case SampleType::UInt8:
-      return PixelFormat::UInt8;
-    case SampleType::UInt16:
-      return PixelFormat::UInt16;
-    case SampleType::Float32:
-    case SampleType::Float64:
-      break;
-  }
-  return PixelFormat::Float;
-}
-
-SampleType sampleTypeOf(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::UInt8:
-      return SampleType::UInt8;
-    case PixelFormat::UInt16:
-      return SampleType::UInt16;
-    case PixelFormat::Half:
-    case PixelFormat::Float:
-      break;
-  }
-  return SampleType::Float32;
-}
-
 }  // namespace
 
 void registerMesh(py::module_& m) {

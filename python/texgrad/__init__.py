@@ -15,6 +15,7 @@ from ._texgrad import (  # noqa: F401
     IoError,
     Mesh,
     NumericalError,
+    PageLayout,
     UnsupportedError,
     __version__,
     dilate,
@@ -28,8 +29,12 @@ from ._texgrad import (  # noqa: F401
     seams,
     stitch,
     write_image,
+    write_texture_pages,
 )
 from ._texgrad import TexelDomain as _NativeTexelDomain
+from ._texgrad import _read_texture_pages
+
+import typing
 
 try:
     import scipy.sparse as _sparse
@@ -90,6 +95,25 @@ class TexelDomain(_NativeTexelDomain):
         return (self.differential().T @ self.hodge_star1()).tocsr()
 
 
+class TexturePages(typing.NamedTuple):
+    """A texture over its pages (``read_texture_pages``): the mesh placed on the layout, the
+    layout image and the ``PageLayout``."""
+
+    mesh: Mesh
+    image: typing.Any
+    layout: PageLayout
+
+
+def read_texture_pages(mesh, *, slot="baseColor", texture=None, dtype=None):
+    """Reads the mesh's ``slot`` texture over its pages (UDIM tiles, or one image per material;
+    one page for a plain texture) as the CLI does: ``TexturePages(mesh, image, layout)``, the
+    mesh placed on the layout (build a TexelDomain or run an app on it), the layout image (H x W
+    x C, row 0 = top; the file's dtype unless ``dtype`` says otherwise) and the layout.
+    ``texture`` names the image file(s) instead of the mesh's (``name.<UDIM>.png`` for tiles).
+    A missing page raises ``IoError`` naming its file and the faces that need it."""
+    return TexturePages(*_read_texture_pages(mesh, slot, texture, dtype))
+
+
 __all__ = [
     "Cancelled",
     "GeodesicSolver",
@@ -98,7 +122,9 @@ __all__ = [
     "IoError",
     "Mesh",
     "NumericalError",
+    "PageLayout",
     "TexelDomain",
+    "TexturePages",
     "UnsupportedError",
     "__version__",
     "dilate",
@@ -109,8 +135,10 @@ __all__ = [
     "react",
     "read_image",
     "read_mesh",
+    "read_texture_pages",
     "seams",
     "stitch",
     "tqdm_callback",
     "write_image",
+    "write_texture_pages",
 ]

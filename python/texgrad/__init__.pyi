@@ -1,7 +1,7 @@
 """Type stub of the texgrad Python module (editors complete arguments from it)."""
 
 from os import PathLike
-from typing import Any, Callable, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -55,6 +55,35 @@ def read_mesh(path: Path, *, weld_tolerance: float = 0.0, uv_set: int = 0, wrap:
               slot: str = "baseColor") -> Mesh: ...
 def read_image(path: Path, *, dtype: DType = None) -> Image: ...
 def write_image(path: Path, image: Image, *, bit_depth: Optional[str] = None) -> None: ...
+
+class PageLayout:
+    """A texture's pages (UDIM tiles or one image per material) side by side in one lattice."""
+    @property
+    def pages(self) -> list[dict[str, Any]]: ...  # name, file, width, height, offset, tile, faces
+    @property
+    def udim(self) -> bool: ...
+    @property
+    def slot(self) -> str: ...
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def mesh(self) -> Mesh: ...
+    def split(self, image: Image, *, dtype: DType = None) -> dict[str, Image]: ...
+    def output_paths(self, out: Path) -> list[str]: ...
+    def __len__(self) -> int: ...
+
+class TexturePages(NamedTuple):
+    """read_texture_pages' result: the mesh placed on the layout, the layout image, the layout."""
+    mesh: Mesh
+    image: Image
+    layout: PageLayout
+
+def read_texture_pages(mesh: Mesh, *, slot: str = "baseColor", texture: Optional[Path] = None,
+                       dtype: DType = None) -> TexturePages: ...
+def write_texture_pages(out: Path, layout: PageLayout, image: Image, *,
+                        bit_depth: Optional[str] = None) -> list[str]: ...
 
 class TexelDomain:
     """Atlas, texel grid and operators of a mesh at one resolution."""
