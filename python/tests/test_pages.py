@@ -99,6 +99,30 @@ def test_layout_places_each_tile_at_its_offset(tmp_path):
     assert planar.shape == (TILE_SIZE, TILE_SIZE) and planar.dtype == np.float32
 
 
+def test_udim_tiles_named_by_texture_argument_match_cli(tmp_path):
+    # An OBJ naming no texture: the tiles come from texture= as from the CLI's TEXTURE argument;
+    # read_mesh(texture=) keeps the faces in their tiles (wrapping would fold them into one).
+    obj = cube_over_tiles(tmp_path)
+    (tmp_path / "bare.obj").write_text(
+        "".join(line for line in obj.read_text().splitlines(True)
+                if not line.startswith(("mtllib", "usemtl"))))
+    tiles = tmp_path / "t.<UDIM>.png"
+    run_cli("filter", tmp_path / "bare.obj", tiles, "--beta", "0.3", "--out",
+            tmp_path / "cli.<UDIM>.png", "-q")
+    mesh = texgrad.read_mesh(tmp_path / "bare.obj", texture=tiles)
+    pages = texgrad.read_texture_pages(mesh, texture=tiles)
+    assert [p["name"] for p in pages.layout.pages] == TILES
+    named = texgrad.read_texture_pages(texgrad.read_mesh(obj))
+    assert np.array_equal(pages.image, named.image)
+    written = texgrad.write_texture_pages(tmp_path / "py.<UDIM>.png", pages.layout,
+                                          texgrad.filter(pages.mesh, pages.image, beta=0.3))
+    for tile, path in zip(TILES, written):
+        assert np.array_equal(texgrad.read_image(path),
+                              texgrad.read_image(tmp_path / f"cli.{tile}.png")), tile
+    wrapped, parents = texgrad.read_mesh(tmp_path / "bare.obj", wrap="clamp").wrapped(
+        texture=tiles)
+    assert np.array_equal(wrapped.uvs, mesh.uvs) and len(parents) == wrapped.face_count
+
 def test_missing_tile_raises_naming_its_file(tmp_path):
     obj = cube_over_tiles(tmp_path)
     (tmp_path / "t.1012.png").unlink()
