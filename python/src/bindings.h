@@ -9,6 +9,7 @@
 #include <Eigen/SparseCore>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "texgrad/apps/geodesic_source.h"
 #include "texgrad/apps/system_solver.h"
@@ -53,6 +54,9 @@ SampleType sampleTypeFrom(const py::object& dtype, SampleType fallback);
 PixelFormat formatOf(SampleType type);
 /// Sample type a file's pixel format is returned as (float32 for half and float).
 SampleType sampleTypeOf(PixelFormat format);
+
+/// (width, height) from N or (width, height); TypeError or InvalidInputError otherwise.
+std::pair<int, int> resolutionFrom(const py::handle& resolution);
 
 /// A float64 matrix (rows x cols; cols < 0: any) from an array-like; throws InvalidInputError
 /// naming `name` on a wrong shape or a non-finite value.

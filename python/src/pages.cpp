@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "bindings.h"
@@ -65,6 +67,27 @@ py::tuple readPages(const std::shared_ptr<TexturedMesh>& mesh, const std::string
   const SampleType type = sampleTypeFrom(dtype, sampleTypeOf(image.format));
   py::array array = arrayFromImage(std::move(image), type, false);
   return py::make_tuple(pages->mesh, array, pages);
+}
+
+py::tuple placePages(const std::shared_ptr<TexturedMesh>& mesh, const py::object& resolution,
+                     const std::string& slot, const std::optional<std::filesystem::path>& texture) {
+  std::optional<std::pair<int, int>> size;
+  if (!resolution.is_none()) size = resolutionFrom(resolution);
+  auto pages = std::make_shared<PagesHandle>();
+  {
+    py::gil_scoped_release release;
+    pages->layout = findTexturePages(*mesh, slot, texture.value_or(std::filesystem::path()));
+    if (size) {  // a texture an app makes (geodesic, lic, react, mask): every page this size
+      for (TexturePage& page : pages->layout.pages) std::tie(page.width, page.height) = *size;
+      arrangePages(pages->layout);
+    } else {
+      readPageSizes(pages->layout, *mesh);  // the sizes of the page images (headers only)
+    }
+    pages->mesh = pages->layout.single()
+                      ? mesh
+                      : std::make_shared<TexturedMesh>(placeOnPages(*mesh, pages->layout));
+  }
+  return py::make_tuple(pages->mesh, pages);
 }
 
 /// The layout image argument, checked against the layout's size.
@@ -188,6 +211,14 @@ void registerPages(py::module_& m) {
   m.def("_read_texture_pages", &readPages, py::arg("mesh"), py::arg("slot"), py::arg("texture"),
         py::arg("dtype"),
         "(placed mesh, layout image, PageLayout); texgrad.read_texture_pages wraps it.");
+
+  m.def("place_on_pages", &placePages, py::arg("mesh"), py::arg("resolution") = py::none(),
+        py::kw_only(), py::arg("slot") = "baseColor", py::arg("texture") = py::none(),
+        "(placed mesh, PageLayout) without reading the images: the pages of the `slot` texture "
+        "(or of `texture`) each `resolution` (N or (width, height)) for a texture an app makes "
+        "(geodesic, lic, react, mask: pass resolution=(layout.width, layout.height) to it), or "
+        "the sizes of the page images (headers only) when resolution is None. The CLI's "
+        "geodesic, lic and react place a mesh so.");
 
   m.def("write_texture_pages", &writePages, py::arg("out"), py::arg("layout"), py::arg("image"),
         py::kw_only(), py::arg("bit_depth") = py::none(),

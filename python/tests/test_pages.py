@@ -123,6 +123,24 @@ def test_udim_tiles_named_by_texture_argument_match_cli(tmp_path):
         texture=tiles)
     assert np.array_equal(wrapped.uvs, mesh.uvs) and len(parents) == wrapped.face_count
 
+def test_geodesic_over_udim_tiles_matches_cli_per_tile(tmp_path):
+    # place_on_pages without images read: the tiles' sizes from their headers, as the CLI's
+    # geodesic takes them; distances over the layout cross the tile borders by the seams.
+    obj = cube_over_tiles(tmp_path)
+    run_cli("geodesic", obj, "--source-vertex", "0", "--out", tmp_path / "cli.<UDIM>.exr", "-q")
+    mesh, layout = texgrad.place_on_pages(texgrad.read_mesh(obj))
+    assert (layout.width, layout.height) == (448, TILE_SIZE)
+    distance = texgrad.geodesic(mesh, source_vertices=[0],
+                                resolution=(layout.width, layout.height))
+    written = texgrad.write_texture_pages(tmp_path / "py.<UDIM>.exr", layout, distance,
+                                          bit_depth="float")
+    for tile, path in zip(TILES, written):
+        ours = texgrad.read_image(path)
+        assert np.array_equal(ours, texgrad.read_image(tmp_path / f"cli.{tile}.exr")), tile
+        assert ours.max() > 1.0, tile  # every tile reached (the cube's side is 2)
+    _, sized = texgrad.place_on_pages(texgrad.read_mesh(obj), 32)
+    assert [(p["width"], p["height"]) for p in sized.pages] == [(32, 32)] * 4
+
 def test_missing_tile_raises_naming_its_file(tmp_path):
     obj = cube_over_tiles(tmp_path)
     (tmp_path / "t.1012.png").unlink()

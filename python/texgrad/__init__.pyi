@@ -82,6 +82,9 @@ class TexturePages(NamedTuple):
 
 def read_texture_pages(mesh: Mesh, *, slot: str = "baseColor", texture: Optional[Path] = None,
                        dtype: DType = None) -> TexturePages: ...
+def place_on_pages(mesh: Mesh, resolution: Optional[Resolution] = None, *,
+                   slot: str = "baseColor",
+                   texture: Optional[Path] = None) -> tuple[Mesh, PageLayout]: ...
 def write_texture_pages(out: Path, layout: PageLayout, image: Image, *,
                         bit_depth: Optional[str] = None) -> list[str]: ...
 
