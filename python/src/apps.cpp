@@ -29,25 +29,6 @@ namespace {
 /// Resolution when neither the call nor the mesh's texture gives one (`texgrad geodesic`'s).
 constexpr int kDefaultGeodesicResolution = 1024;
 
-/// (width, height) from N or (width, height).
-std::pair<int, int> resolutionFrom(const py::handle& resolution) {
-  std::pair<int, int> size;
-  if (py::isinstance<py::int_>(resolution)) {
-    const int n = resolution.cast<int>();
-    size = {n, n};
-  } else {
-    try {
-      size = resolution.cast<std::pair<int, int>>();
-    } catch (const py::cast_error&) {
-      throw py::type_error("resolution must be N or (width, height)");
-    }
-  }
-  if (size.first < 1 || size.second < 1)
-    throw InvalidInputError("resolution must be positive, got " + std::to_string(size.first) +
-                            " x " + std::to_string(size.second));
-  return size;
-}
-
 /// The domain's size if `target` is a TexelDomain, else `resolution` (N or (W, H)).
 std::pair<int, int> sizeFor(const py::handle& target, const py::handle& resolution,
                             std::pair<int, int> fallback) {
@@ -211,6 +192,24 @@ py::array mask(const py::handle& target, const py::object& resolution, const std
 }
 
 }  // namespace
+
+std::pair<int, int> resolutionFrom(const py::handle& resolution) {
+  std::pair<int, int> size;
+  if (py::isinstance<py::int_>(resolution)) {
+    const int n = resolution.cast<int>();
+    size = {n, n};
+  } else {
+    try {
+      size = resolution.cast<std::pair<int, int>>();
+    } catch (const py::cast_error&) {
+      throw py::type_error("resolution must be N or (width, height)");
+    }
+  }
+  if (size.first < 1 || size.second < 1)
+    throw InvalidInputError("resolution must be positive, got " + std::to_string(size.first) +
+                            " x " + std::to_string(size.second));
+  return size;
+}
 
 namespace {
 

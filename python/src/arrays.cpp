@@ -261,4 +261,30 @@ void applySolverKeywords(const py::dict& keywords, SolverSettings& s) {
   s.validate();
 }
 
+PixelFormat formatOf(SampleType type) {
+  switch (type) {
+    case SampleType::UInt8:
+      return PixelFormat::UInt8;
+    case SampleType::UInt16:
+      return PixelFormat::UInt16;
+    case SampleType::Float32:
+    case SampleType::Float64:
+      break;
+  }
+  return PixelFormat::Float;
+}
+
+SampleType sampleTypeOf(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::UInt8:
+      return SampleType::UInt8;
+    case PixelFormat::UInt16:
+      return SampleType::UInt16;
+    case PixelFormat::Half:
+    case PixelFormat::Float:
+      break;
+  }
+  return SampleType::Float32;
+}
+
 }  // namespace texgrad::python

@@ -9,6 +9,7 @@
 #include <Eigen/SparseCore>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "texgrad/apps/geodesic_source.h"
 #include "texgrad/apps/system_solver.h"
@@ -49,6 +50,14 @@ inline std::string textOf(py::handle object) {
 /// The sample type named by an app's `dtype=` keyword (None: `fallback`).
 SampleType sampleTypeFrom(const py::object& dtype, SampleType fallback);
 
+/// Pixel format an image of `type` is written in by default (float for float64 too).
+PixelFormat formatOf(SampleType type);
+/// Sample type a file's pixel format is returned as (float32 for half and float).
+SampleType sampleTypeOf(PixelFormat format);
+
+/// (width, height) from N or (width, height); TypeError or InvalidInputError otherwise.
+std::pair<int, int> resolutionFrom(const py::handle& resolution);
+
 /// A float64 matrix (rows x cols; cols < 0: any) from an array-like; throws InvalidInputError
 /// naming `name` on a wrong shape or a non-finite value.
 Eigen::MatrixXd matrixFromArray(const py::handle& array, const std::string& name,
@@ -81,6 +90,7 @@ void registerErrors(py::module_& m);
 void registerMesh(py::module_& m);
 void registerDomain(py::module_& m);
 void registerApps(py::module_& m);
+void registerPages(py::module_& m);
 void registerInteractive(py::module_& m);
 
 }  // namespace texgrad::python

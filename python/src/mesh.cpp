@@ -4,6 +4,8 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -134,32 +136,6 @@ py::dict atlasReport(const TexturedMesh& mesh, const py::object& resolution) {
   return py::module_::import("json").attr("loads")(json).cast<py::dict>();
 }
 
-PixelFormat formatOf(SampleType type) {
-  switch (type) {
-    case SampleType::UInt8:
-      return PixelFormat::UInt8;
-    case SampleType::UInt16:
-      return PixelFormat::UInt16;
-    case SampleType::Float32:
-    case SampleType::Float64:
-      break;
-  }
-  return PixelFormat::Float;
-}
-
-SampleType sampleTypeOf(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::UInt8:
-      return SampleType::UInt8;
-    case PixelFormat::UInt16:
-      return SampleType::UInt16;
-    case PixelFormat::Half:
-    case PixelFormat::Float:
-      break;
-  }
-  return SampleType::Float32;
-}
-
 }  // namespace
 
 void registerMesh(py::module_& m) {
@@ -213,23 +189,26 @@ void registerMesh(py::module_& m) {
           "default, as texgrad reads it), or None if the file names none.")
       .def(
           "wrapped",
-          [](const TexturedMesh& mesh, const std::string& wrap, const std::string& slot) {
+          [](const TexturedMesh& mesh, const std::string& wrap, const std::string& slot,
+             const std::optional<std::filesystem::path>& texture) {
             const UvWrap mode = parseUvWrap(wrap, mesh, slot);
             WrappedMesh wrapped;
             {
               py::gil_scoped_release release;
-              wrapped = meshForPages(mesh, mode, slot);
+              wrapped = meshForPages(mesh, mode, slot, texture.value_or(std::filesystem::path()));
             }
             py::array_t<int32_t> parents(static_cast<py::ssize_t>(wrapped.parentFace.size()));
             std::copy(wrapped.parentFace.begin(), wrapped.parentFace.end(), parents.mutable_data());
             return py::make_tuple(std::make_shared<TexturedMesh>(std::move(wrapped.mesh)), parents);
           },
-          py::arg("wrap") = "auto", py::arg("slot") = "baseColor",
+          py::arg("wrap") = "auto", py::arg("slot") = "baseColor", py::kw_only(),
+          py::arg("texture") = py::none(),
           "(mesh, parents): the mesh as a texture that wraps reads it, as the CLI's --wrap: "
           "faces crossing an integer UV line cut there (the sides joined by a seam) and every "
           "unit tile moved into [0, 1]^2 (a UDIM texture's tiles are pages: they stay); wrap "
           "'auto' (the sampler of the texture in `slot`, repeat when none), 'repeat', 'mirror' "
-          "or 'clamp' (unchanged). parents[f] is the face "
+          "or 'clamp' (unchanged); `texture` names the image file(s) instead of the mesh's "
+          "('t.<UDIM>.png': tiles, as read_texture_pages). parents[f] is the face "
           "of this mesh that face f is part of: per-face 3-D vectors follow as field[parents].")
       .def("atlas_report", &atlasReport, py::arg("resolution") = py::none(),
            "The atlas diagnostics as the dict `texgrad info --json` prints (texel "
@@ -245,23 +224,28 @@ void registerMesh(py::module_& m) {
   m.def(
       "read_mesh",
       [](const std::filesystem::path& path, double weldTolerance, int uvSet,
-         const std::string& wrap, const std::string& slot) {
+         const std::string& wrap, const std::string& slot,
+         const std::optional<std::filesystem::path>& texture) {
         MeshReadOptions options;
         options.weldTolerance = weldTolerance;
         options.uvSet = uvSet;
         py::gil_scoped_release release;
         TexturedMesh mesh = readMesh(path, options);
         const UvWrap mode = parseUvWrap(wrap, mesh, slot);
-        return std::make_shared<TexturedMesh>(meshForPages(std::move(mesh), mode, slot).mesh);
+        return std::make_shared<TexturedMesh>(
+            meshForPages(std::move(mesh), mode, slot, texture.value_or(std::filesystem::path()))
+                .mesh);
       },
       py::arg("path"), py::kw_only(), py::arg("weld_tolerance") = 0.0, py::arg("uv_set") = 0,
-      py::arg("wrap") = "auto", py::arg("slot") = "baseColor",
+      py::arg("wrap") = "auto", py::arg("slot") = "baseColor", py::arg("texture") = py::none(),
       "Reads a mesh file the CLI reads (.obj with its .mtl, .ply, .gltf, .glb), welding "
       "positions closer than weld_tolerance (model units) so seams are found (uv_set picks glTF's "
       "TEXCOORD_N; OBJ and PLY have only 0), and wraps its UVs (not a UDIM texture's) "
       "as the CLI's --wrap does for the texture in `slot` (Mesh.wrapped): wrap 'auto' (the "
       "file's sampler, repeat when it names none), 'repeat', 'mirror' or 'clamp' (the file's "
-      "UVs and faces as they are; per-face data of the file then match the faces).");
+      "UVs and faces as they are; per-face data of the file then match the faces). `texture` "
+      "names the image file(s) the CLI's TEXTURE argument would ('t.<UDIM>.png': UDIM tiles, "
+      "whose faces are cut at the tile borders and stay in their tiles).");
 
   m.def(
       "read_image",

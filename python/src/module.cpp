@@ -9,5 +9,6 @@ PYBIND11_MODULE(_texgrad, m) {
   texgrad::python::registerMesh(m);
   texgrad::python::registerDomain(m);
   texgrad::python::registerApps(m);
+  texgrad::python::registerPages(m);
   texgrad::python::registerInteractive(m);
 }

@@ -15,6 +15,7 @@ from ._texgrad import (  # noqa: F401
     IoError,
     Mesh,
     NumericalError,
+    PageLayout,
     UnsupportedError,
     __version__,
     dilate,
@@ -22,14 +23,19 @@ from ._texgrad import (  # noqa: F401
     geodesic,
     lic,
     mask,
+    place_on_pages,
     react,
     read_image,
     read_mesh,
     seams,
     stitch,
     write_image,
+    write_texture_pages,
 )
 from ._texgrad import TexelDomain as _NativeTexelDomain
+from ._texgrad import _read_texture_pages
+
+import typing
 
 try:
     import scipy.sparse as _sparse
@@ -90,6 +96,25 @@ class TexelDomain(_NativeTexelDomain):
         return (self.differential().T @ self.hodge_star1()).tocsr()
 
 
+class TexturePages(typing.NamedTuple):
+    """A texture over its pages (``read_texture_pages``): the mesh placed on the layout, the
+    layout image and the ``PageLayout``."""
+
+    mesh: Mesh
+    image: typing.Any
+    layout: PageLayout
+
+
+def read_texture_pages(mesh, *, slot="baseColor", texture=None, dtype=None):
+    """Reads the mesh's ``slot`` texture over its pages (UDIM tiles, or one image per material;
+    one page for a plain texture) as the CLI does: ``TexturePages(mesh, image, layout)``, the
+    mesh placed on the layout (build a TexelDomain or run an app on it), the layout image (H x W
+    x C, row 0 = top; the file's dtype unless ``dtype`` says otherwise) and the layout.
+    ``texture`` names the image file(s) instead of the mesh's (``name.<UDIM>.png`` for tiles).
+    A missing page raises ``IoError`` naming its file and the faces that need it."""
+    return TexturePages(*_read_texture_pages(mesh, slot, texture, dtype))
+
+
 __all__ = [
     "Cancelled",
     "GeodesicSolver",
@@ -98,7 +123,9 @@ __all__ = [
     "IoError",
     "Mesh",
     "NumericalError",
+    "PageLayout",
     "TexelDomain",
+    "TexturePages",
     "UnsupportedError",
     "__version__",
     "dilate",
@@ -106,11 +133,14 @@ __all__ = [
     "geodesic",
     "lic",
     "mask",
+    "place_on_pages",
     "react",
     "read_image",
     "read_mesh",
+    "read_texture_pages",
     "seams",
     "stitch",
     "tqdm_callback",
     "write_image",
+    "write_texture_pages",
 ]
