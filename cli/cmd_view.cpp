@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "cli_common.h"
+#include "cli_pages.h"
 #include "commands.h"
 #include "texgrad/apps/texel_domain.h"
 #include "texgrad/io/image_io.h"
@@ -52,6 +53,10 @@ void runView(ViewArgs& args) {
   if (stitch && (args.composite.empty() || args.segments.empty()))
     throw InvalidInputError("--app stitch needs --composite TEXTURE and --segments MASK");
   TexturedMesh mesh = loadMesh(args.mesh, args.read);
+  requireSinglePage(findTexturePages(mesh, "baseColor", stitch ? args.composite : args.texture),
+                    "texgrad view",
+                    "process the pages with filter, seams, geodesic, lic, react or stitch, or "
+                    "view one page's image given as TEXTURE");
   Image texture = stitch ? readImage(args.composite) : loadTexture(mesh, args.mesh, args.texture);
   if (stitch) {
     args.appOptions.segments = readImage(args.segments);

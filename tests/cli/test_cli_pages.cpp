@@ -287,6 +287,11 @@ TEST(CliPages, UdimTilesNamedOnTheCommandLineAreListedAndProcessed) {
   ASSERT_EQ(filter.status, 0) << filter.err;
   for (const char* tile : {"1001", "1002", "1011", "1012"})
     EXPECT_TRUE(std::filesystem::exists(dir / ("out." + std::string(tile) + ".png"))) << tile;
+  // The viewer shows one page: several are refused in one line, before any server starts.
+  const CliResult view = runCli({"view", "tiles.obj", "t.<UDIM>.png"}, dir);
+  EXPECT_EQ(view.status, 1);
+  EXPECT_EQ(lineCount(view.err), 1) << view.err;
+  EXPECT_NE(view.err.find("texgrad view is not supported yet"), std::string::npos) << view.err;
   std::filesystem::remove_all(dir);
 }
 

@@ -9,6 +9,7 @@
 #include <texgrad/apps/texel_domain.h>
 #include <texgrad/io/image_io.h>
 #include <texgrad/io/mesh_reader.h>
+#include <texgrad/io/uv_tiles.h>
 
 int main(int argc, char** argv) {
   if (argc != 4) {
@@ -18,6 +19,10 @@ int main(int argc, char** argv) {
   try {
     texgrad::TexturedMesh mesh = texgrad::readMesh(argv[1]);
     const texgrad::Image texture = texgrad::readImage(argv[2]);
+    // UVs as the texture samples them (the CLI's --wrap auto): charts in other unit tiles are
+    // moved into the image and faces across a tile border are cut there.
+    const texgrad::UvWrap wrap = texgrad::samplerWrap(mesh, "baseColor");
+    mesh = texgrad::wrapTextureCoordinates(std::move(mesh), wrap).mesh;
 
     // Atlas, texel grid and operators at the texture's resolution. Without a beta map the
     // per-piece integrals are not needed after assembly (the CLI drops them too).
