@@ -91,8 +91,11 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
   const BarelyCoveredNeighbours barely = barelyBound(domain, ops, options);
   const Eigen::MatrixXd barelyX0 = x(barely.unknowns, Eigen::all);
   const Eigen::MatrixXd rhs = screenedRightHandSide(ops, x, options);
-  Eigen::SparseMatrix<double> system = ops.screenedSystem(options.alpha);
-  owned.reset();  // M, S and C: only `system` is needed from here on
+  // From here on only A is needed: formed in M's storage when the operators are ours, which
+  // frees S with them (`ops` is not used again).
+  Eigen::SparseMatrix<double> system =
+      owned ? TexelOperators::screenedSystem(std::move(owned), options.alpha)
+            : ops.screenedSystem(options.alpha);
   solver.initAndUpdate(std::move(system), progress);
   FilterResult result;
   result.report = solver.solve(rhs, x, progress);

@@ -438,18 +438,42 @@ int64_t TexelOperators::storageBytes() const {
                        m.seamTexels, m.metric, m.factors, m.full, m.partial, m.seam);
 }
 
+namespace {
+
+/// values[k] = alpha values[k] + stiffness[k] over a pattern M and S share: alpha M + S formed
+/// in M's values.
+void screenValues(double alpha, const double* stiffness, double* values, Eigen::Index count) {
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, count, 1 << 16),
+                    [&](const tbb::blocked_range<Eigen::Index>& r) {
+                      for (Eigen::Index k = r.begin(); k != r.end(); ++k)
+                        values[k] = alpha * values[k] + stiffness[k];
+                    });
+}
+
+}  // namespace
+
+void TexelOperators::addSeamScreening(double alpha, SparseMatrixd& system) const {
+  if (impl_->options.seamContinuityWeight != 0.0)
+    system += (alpha * impl_->options.seamContinuityWeight) * impl_->seamContinuity;
+}
+
 SparseMatrixd TexelOperators::screenedSystem(double alpha) const {
   // M and S share one pattern: copy M's and combine the values (no sparse merge).
   SparseMatrixd system = impl_->mass;
-  double* out = system.valuePtr();
-  const double* sv = impl_->stiffnessValues.data();
-  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, system.nonZeros(), 1 << 16),
-                    [&](const tbb::blocked_range<Eigen::Index>& r) {
-                      for (Eigen::Index k = r.begin(); k != r.end(); ++k)
-                        out[k] = alpha * out[k] + sv[k];
-                    });
-  if (impl_->options.seamContinuityWeight != 0.0)
-    system += (alpha * impl_->options.seamContinuityWeight) * impl_->seamContinuity;
+  screenValues(alpha, impl_->stiffnessValues.data(), system.valuePtr(), system.nonZeros());
+  addSeamScreening(alpha, system);
+  return system;
+}
+
+SparseMatrixd TexelOperators::screenedSystem(std::unique_ptr<TexelOperators> operators,
+                                             double alpha) {
+  if (!operators) throw InvalidInputError("screenedSystem: no operators were handed over");
+  // M's own arrays become A's (a swap: Eigen 3.4's move assignment of a SparseMatrix copies).
+  SparseMatrixd system;
+  system.swap(operators->impl_->mass);
+  screenValues(alpha, operators->impl_->stiffnessValues.data(), system.valuePtr(),
+               system.nonZeros());
+  operators->addSeamScreening(alpha, system);
   return system;
 }
 

@@ -127,6 +127,24 @@ TEST(SoftSeams, WithoutLambdaChartsAreUncoupled) {
             1);
 }
 
+TEST(SoftSeams, ConsumedOperatorsFormTheSameSystemInTheirOwnStorage) {
+  const Problem p;
+  for (const auto& [kind, lambda] :
+       {std::pair{fem::BasisKind::Bilinear, 1.0}, std::pair{fem::BasisKind::SeamContinuous, 0.0}}) {
+    auto ops = operators(p, kind, lambda);
+    const SparseMatrixd kept = ops->screenedSystem(kAlpha);
+    const double* massValues = ops->mass().valuePtr();
+    const SparseMatrixd consumed = TexelOperators::screenedSystem(std::move(ops), kAlpha);
+    ASSERT_EQ(consumed.nonZeros(), kept.nonZeros());
+    EXPECT_EQ((consumed - kept).norm(), 0.0) << "lambda " << lambda;
+    // Without seam screening A is M's own array: no second copy of the pattern was made.
+    if (lambda == 0.0) {
+      EXPECT_EQ(consumed.valuePtr(), massValues);
+    }
+  }
+  EXPECT_THROW(TexelOperators::screenedSystem(nullptr, kAlpha), InvalidInputError);
+}
+
 TEST(SoftSeams, ContinuousBasisNeedsNoLambda) {
   const Problem p;
   const auto ops = operators(p, fem::BasisKind::SeamContinuous, 0.0);

@@ -114,6 +114,10 @@ class TexelOperators {
   /// (+ alpha lambda E_C for the bilinear baseline): alpha M + S + alpha lambda C
   /// (paper Sec. 4.2 and 5.3); the right-hand side alpha mass_h(psi) + div_h(omega) is unchanged.
   SparseMatrixd screenedSystem(double alpha) const;
+  /// screenedSystem(alpha) formed in M's own storage, consuming the operators: a one-shot caller
+  /// that has no further use for M and S never holds a second copy of their pattern (117 bytes
+  /// per active texel at spot 2048², docs/memory.md).
+  static SparseMatrixd screenedSystem(std::unique_ptr<TexelOperators> operators, double alpha);
   /// sum_c beta_c S_c with S_c the stiffness integrated over cell c only (paper Sec. 7.1);
   /// beta is indexed by TexelGrid::cellIndex. Same pattern as stiffness(). Needs the piece
   /// integrals (OperatorOptions::keepPieceIntegrals).
@@ -141,6 +145,9 @@ class TexelOperators {
   int64_t storageBytes() const;
 
  private:
+  /// system += alpha lambda C when the bilinear basis has a seam weight (paper Sec. 4.2).
+  void addSeamScreening(double alpha, SparseMatrixd& system) const;
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
