@@ -43,11 +43,11 @@ int colourChannels(Eigen::Index channels) {
 
 /// Solves (alpha W M W + S + lock) x = alpha W M W xbar + div + lock input into `x`; locked
 /// texels end exactly at `input` (the uncompensated source values; may be empty without a lock
-/// mask). The system matrix is formed in one copy of M's pattern (S shares it); `owned` (the
-/// domain's operators, handed over, or null to use the domain's) is freed once A, the
-/// right-hand side and the barely covered texels' neighbours are formed, and xbar becomes the
-/// initial guess, so neither is held through the solver's set-up and cycles. The solver is gone
-/// when this returns.
+/// mask). `owned` (the domain's operators, handed over, or null to use the domain's) becomes A:
+/// the system matrix is formed in M's own storage once the right-hand side and the barely
+/// covered texels' neighbours are formed (in one copy of M's pattern with the domain's), and
+/// xbar becomes the initial guess, so neither is held through the solver's set-up and cycles.
+/// The solver is gone when this returns.
 StitchResult solveStitch(const TexelDomain& domain, std::unique_ptr<TexelOperators> owned,
                          Eigen::MatrixXd xbar, const Eigen::MatrixXd& input, Eigen::VectorXd known,
                          Eigen::MatrixXd divergence, const StitchOptions& options,
@@ -59,33 +59,19 @@ StitchResult solveStitch(const TexelDomain& domain, std::unique_ptr<TexelOperato
   const SparseViewd stiffness = ops.stiffness();
   if (!mass.isCompressed() || stiffness.nonZeros() != mass.nonZeros())
     throw InvalidInputError("solveStitch: M and S must share one compressed pattern");
-  Eigen::SparseMatrix<double> a = mass;  // W M W first, then the system matrix in place
-  for (int k = 0; k < a.outerSize(); ++k)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(a, k); it; ++it)
-      it.valueRef() *= known[it.row()] * known[it.col()];
-  known.resize(0);
-  Eigen::MatrixXd rhs = options.alpha * (a * xbar) + divergence;
+  // rhs = alpha W M W xbar + div with W = diag(known), applied as scalings (no weighted copy
+  // of M).
+  Eigen::MatrixXd rhs = known.asDiagonal() * xbar;
+  rhs = options.alpha * (known.asDiagonal() * (mass * rhs)) + divergence;
   divergence.resize(0, 0);
-  // A = alpha W M W + 1e-6 alpha M + S; a little plain screening keeps components that no
-  // source sees solvable.
-  for (Eigen::Index k = 0; k < a.nonZeros(); ++k)
-    a.valuePtr()[k] = options.alpha * a.valuePtr()[k] + 1e-6 * options.alpha * mass.valuePtr()[k] +
-                      stiffness.valuePtr()[k];
   StitchResult result;
   std::vector<uint8_t> locked(static_cast<size_t>(n), 0);
+  Eigen::VectorXd lockValues;
   if (!options.lock.empty()) {
     checkSize(grid, options.lock, "the lock mask");
-    const Eigen::VectorXd lockValues = channelZero(grid, options.lock);
-    double maxDiagonal = 0.0;
-    for (Eigen::Index u = 0; u < n; ++u) maxDiagonal = std::max(maxDiagonal, a.coeff(u, u));
-    const double weight = 1e8 * maxDiagonal;
-    for (Eigen::Index u = 0; u < n; ++u) {
-      if (!(lockValues[u] > 0.5)) continue;
-      locked[static_cast<size_t>(u)] = 1;
-      a.coeffRef(u, u) += weight;
-      rhs.row(u) += weight * input.row(u);
-      ++result.lockedTexels;
-    }
+    lockValues = channelZero(grid, options.lock);
+    for (Eigen::Index u = 0; u < n; ++u)
+      if (lockValues[u] > 0.5) locked[static_cast<size_t>(u)] = 1;
   }
   BarelyCoveredNeighbours bound;
   if (!options.rawSolution) {
@@ -93,8 +79,27 @@ StitchResult solveStitch(const TexelDomain& domain, std::unique_ptr<TexelOperato
     std::erase_if(barely, [&](int32_t u) { return locked[static_cast<size_t>(u)] != 0; });
     bound = barelyCoveredNeighbours(mass, std::move(barely));
   }
+  // A = alpha W M W + 1e-6 alpha M + S; a little plain screening keeps components that no
+  // source sees solvable. Formed in M's own storage when the operators are ours (`ops` and
+  // `mass` are not used again).
+  const EntryCombination entry = [&](Eigen::Index r, Eigen::Index c, double m, double s) {
+    return options.alpha * (m * (known[r] * known[c])) + 1e-6 * options.alpha * m + s;
+  };
+  Eigen::SparseMatrix<double> a =
+      owned ? TexelOperators::combined(std::move(owned), entry) : ops.combined(entry);
+  known.resize(0);
+  if (!options.lock.empty()) {
+    double maxDiagonal = 0.0;
+    for (Eigen::Index u = 0; u < n; ++u) maxDiagonal = std::max(maxDiagonal, a.coeff(u, u));
+    const double weight = 1e8 * maxDiagonal;
+    for (Eigen::Index u = 0; u < n; ++u) {
+      if (!locked[static_cast<size_t>(u)]) continue;
+      a.coeffRef(u, u) += weight;
+      rhs.row(u) += weight * input.row(u);
+      ++result.lockedTexels;
+    }
+  }
   const Eigen::MatrixXd boundInput = xbar(bound.unknowns, Eigen::all);
-  owned.reset();
   x = std::move(xbar);
   {
     SystemSolver solver(grid, options.solver);

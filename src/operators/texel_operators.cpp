@@ -450,7 +450,35 @@ void screenValues(double alpha, const double* stiffness, double* values, Eigen::
                     });
 }
 
+/// values[k] = combine(row, column, values[k], stiffness[k]) over `pattern`'s entries.
+void combineValues(const SparseMatrixd& pattern, const double* stiffness,
+                   const EntryCombination& combine, double* values) {
+  const int* outer = pattern.outerIndexPtr();
+  const int* inner = pattern.innerIndexPtr();
+  tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, pattern.outerSize(), 4096),
+                    [&](const tbb::blocked_range<Eigen::Index>& r) {
+                      for (Eigen::Index c = r.begin(); c != r.end(); ++c)
+                        for (int k = outer[c]; k < outer[c + 1]; ++k)
+                          values[k] = combine(inner[k], c, values[k], stiffness[k]);
+                    });
+}
+
 }  // namespace
+
+SparseMatrixd TexelOperators::combined(const EntryCombination& combine) const {
+  SparseMatrixd out = impl_->mass;
+  combineValues(out, impl_->stiffnessValues.data(), combine, out.valuePtr());
+  return out;
+}
+
+SparseMatrixd TexelOperators::combined(std::unique_ptr<TexelOperators> operators,
+                                       const EntryCombination& combine) {
+  if (!operators) throw InvalidInputError("combined: no operators were handed over");
+  SparseMatrixd out;
+  out.swap(operators->impl_->mass);  // as in screenedSystem: M's arrays become the result's
+  combineValues(out, operators->impl_->stiffnessValues.data(), combine, out.valuePtr());
+  return out;
+}
 
 void TexelOperators::addSeamScreening(double alpha, SparseMatrixd& system) const {
   if (impl_->options.seamContinuityWeight != 0.0)

@@ -145,6 +145,29 @@ TEST(SoftSeams, ConsumedOperatorsFormTheSameSystemInTheirOwnStorage) {
   EXPECT_THROW(TexelOperators::screenedSystem(nullptr, kAlpha), InvalidInputError);
 }
 
+TEST(SoftSeams, CombinedEntriesSeeTheirRowColumnAndBothOperators) {
+  const Problem p;
+  auto ops = operators(p, fem::BasisKind::SeamContinuous, 0.0);
+  const SparseMatrixd mass = ops->mass();
+  const SparseMatrixd stiffness = ops->stiffness();
+  const EntryCombination entry = [](Eigen::Index r, Eigen::Index c, double m, double s) {
+    return r == c ? m : 2.0 * s + static_cast<double>(r - c);
+  };
+  const SparseMatrixd kept = ops->combined(entry);
+  const double* massValues = ops->mass().valuePtr();
+  const SparseMatrixd consumed = TexelOperators::combined(std::move(ops), entry);
+  EXPECT_EQ(consumed.valuePtr(), massValues);  // formed in M's own storage
+  ASSERT_EQ(consumed.nonZeros(), mass.nonZeros());
+  for (int c = 0; c < mass.outerSize(); ++c)
+    for (SparseMatrixd::InnerIterator it(mass, c); it; ++it) {
+      const double expected =
+          it.row() == c ? it.value()
+                        : 2.0 * stiffness.coeff(it.row(), c) + static_cast<double>(it.row() - c);
+      ASSERT_EQ(kept.coeff(it.row(), c), expected) << it.row() << ", " << c;
+      ASSERT_EQ(consumed.coeff(it.row(), c), expected) << it.row() << ", " << c;
+    }
+}
+
 TEST(SoftSeams, ContinuousBasisNeedsNoLambda) {
   const Problem p;
   const auto ops = operators(p, fem::BasisKind::SeamContinuous, 0.0);

@@ -57,6 +57,10 @@ using SurfaceScalar = std::function<double(const fem::SurfacePoint&)>;
 /// coordinate differentials dx, dy of the point's face; for a 3-D gradient v use J^T v.
 using SurfaceOneForm = std::function<Eigen::Vector2d(const fem::SurfacePoint&)>;
 
+/// An entry of a matrix formed from M and S on their shared pattern: (row, column, M_rc, S_rc).
+using EntryCombination =
+    std::function<double(Eigen::Index row, Eigen::Index column, double mass, double stiffness)>;
+
 /// A mass and a stiffness matrix on the same unknowns (TexelOperators::assembledFor,
 /// buildMassStiffness).
 struct MassStiffness {
@@ -118,6 +122,12 @@ class TexelOperators {
   /// that has no further use for M and S never holds a second copy of their pattern (117 bytes
   /// per active texel at spot 2048², docs/memory.md).
   static SparseMatrixd screenedSystem(std::unique_ptr<TexelOperators> operators, double alpha);
+  /// One matrix on M's pattern with entry (r, c) = combine(r, c, M_rc, S_rc): the system matrix
+  /// of an app that weighs M and S entry by entry (stitching's alpha W M W + S).
+  SparseMatrixd combined(const EntryCombination& combine) const;
+  /// combined(combine) formed in M's own storage, consuming the operators (as screenedSystem).
+  static SparseMatrixd combined(std::unique_ptr<TexelOperators> operators,
+                                const EntryCombination& combine);
   /// sum_c beta_c S_c with S_c the stiffness integrated over cell c only (paper Sec. 7.1);
   /// beta is indexed by TexelGrid::cellIndex. Same pattern as stiffness(). Needs the piece
   /// integrals (OperatorOptions::keepPieceIntegrals).
