@@ -44,12 +44,8 @@ PagedTexture placeOnPagesOfSize(TexturedMesh mesh, int width, int height) {
 }
 
 std::optional<PagedTexture> placeOnPagesOfImages(const TexturedMesh& mesh) {
-  PagedTexture paged;
-  paged.layout = findTexturePages(mesh, "baseColor");
-  if (paged.layout.single() && !paged.layout.udim) return std::nullopt;
-  readPageSizes(paged.layout, mesh);
-  paged.mesh = placeOnPages(mesh, paged.layout);
-  return paged;
+  if (isOneImage(findTexturePages(mesh, "baseColor"))) return std::nullopt;
+  return pagedTexture(mesh, placeMeshOnPages(mesh, "baseColor", {}, std::nullopt));
 }
 
 void requireSinglePage(const PageLayout& layout, const std::string& option,

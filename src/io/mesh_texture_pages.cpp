@@ -11,12 +11,16 @@
 
 namespace texgrad {
 
+bool isOneImage(const PageLayout& layout) {
+  return layout.single() && !layout.udim;
+}
+
 MeshTexturePages readMeshTexturePages(const TexturedMesh& mesh, const std::string& slot,
                                       const std::filesystem::path& texture,
                                       const std::function<Image()>& noTexture) {
   MeshTexturePages read;
   read.layout = findTexturePages(mesh, slot, texture);
-  if (read.layout.single() && !read.layout.udim) {  // today's single image, the UVs unchanged
+  if (isOneImage(read.layout)) {  // the UVs unchanged
     if (!texture.empty()) {
       read.image = readImage(texture);
     } else {

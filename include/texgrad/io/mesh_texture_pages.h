@@ -28,10 +28,14 @@ struct MeshTexturePages : MeshPages {
   Image image;  ///< the layout image
 };
 
+/// True if the texture of `layout` is read as one image file, today's single image: a single()
+/// layout that is not a UDIM tile (whose file is named by its tile number).
+bool isOneImage(const PageLayout& layout);
+
 /// Reads the `slot` texture of `mesh`, or `texture` (a file the user names, which may hold a UDIM
-/// token; empty: the mesh's own), as one layout image: one image (a single() layout, not UDIM
-/// tiles) is read by readImage or readMeshTexture, or made by `noTexture` when the mesh names
-/// none; several pages by readPageSizes and readTexturePages (IoError naming a missing page).
+/// token; empty: the mesh's own), as one layout image: one image (isOneImage) is read by readImage
+/// or readMeshTexture, or made by `noTexture` when the mesh names none; several pages by
+/// readPageSizes and readTexturePages (IoError naming a missing page).
 MeshTexturePages readMeshTexturePages(const TexturedMesh& mesh, const std::string& slot,
                                       const std::filesystem::path& texture,
                                       const std::function<Image()>& noTexture);
