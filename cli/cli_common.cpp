@@ -70,6 +70,10 @@ Image loadTexture(const TexturedMesh& mesh, const std::string& meshSpec,
                   const std::string& explicitPath, const std::string& slot) {
   if (!explicitPath.empty()) return readImage(explicitPath);
   if (std::optional<Image> texture = readMeshTexture(mesh, slot)) return std::move(*texture);
+  return missingTexture(meshSpec, slot);
+}
+
+Image missingTexture(const std::string& meshSpec, const std::string& slot) {
   if (isBuiltin(meshSpec)) {
     const std::string name = meshSpec.substr(kBuiltinPrefix.size());
     const bool aligned = name == "aligned-cube" || name == "jittered-cube";
@@ -472,17 +476,12 @@ std::optional<PixelFormat> requestedFormat(const std::string& bitDepth) {
   return parsePixelFormat(bitDepth);
 }
 
-namespace {
-
-/// writeMeshTexture refuses this too; the CLI's message names the flag.
 void requireGltfMeshFor(const std::string& out, const std::filesystem::path& meshSource) {
   if (isGltfPath(out) && !isGltfPath(meshSource))
     throw InvalidInputError("--out " + out +
                             " asks for a glTF asset, but the mesh was not read "
                             "from glTF; write an image (.png, .exr, ...) instead");
 }
-
-}  // namespace
 
 void checkTextureOutputArgs(const std::string& out, const std::string& meshSpec,
                             const std::string& bitDepth) {
@@ -501,15 +500,10 @@ std::string bitDepthHelp(const std::string& defaultText) {
          "16; .exr: half or float; .tif: 8, 16 or float)";
 }
 
-PixelFormat writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const Image& image,
-                               const std::string& slot, const std::string& bitDepth, bool quiet) {
-  requireGltfMeshFor(out, mesh.sourcePath);
-  const WrittenTexture written =
-      writeMeshTexture(out, mesh, image, slot, requestedFormat(bitDepth));
+void printWarnings(bool quiet, const std::vector<std::string>& warnings) {
   if (!quiet)
-    for (const std::string& warning : written.warnings)
+    for (const std::string& warning : warnings)
       std::cerr << "texgrad: warning: " << warning << "\n";
-  return written.stored;
 }
 
 namespace {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -9,6 +10,7 @@
 #include <string_view>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "texgrad/apps/system_solver.h"
 #include "texgrad/core/progress.h"
@@ -32,6 +34,10 @@ std::string builtinMeshNames();
 /// else the built-in sample texture for `builtin:` meshes; throws InvalidInputError if none.
 Image loadTexture(const TexturedMesh& mesh, const std::string& meshSpec,
                   const std::string& explicitPath, const std::string& slot = "baseColor");
+
+/// loadTexture's texture for a mesh that names no `slot` texture: the built-in sample texture for
+/// `builtin:` meshes; throws InvalidInputError asking for the file otherwise.
+Image missingTexture(const std::string& meshSpec, const std::string& slot);
 
 /// Parses "WxH" or "N" (square) into a resolution; throws InvalidInputError on anything else.
 std::pair<int, int> parseResolution(const std::string& text);
@@ -149,17 +155,17 @@ int64_t peakResidentBytes();
 /// JSON of a solve report: iterations, converged, residuals, RMS changes, phase times.
 nlohmann::json toJson(const SolveReport& report);
 
-/// Writes a processed texture with writeMeshTexture (an image file, or a copy of the mesh's glTF
-/// asset when `out` ends in .gltf/.glb); `bitDepth` as parsePixelFormat, empty: the image's.
-/// Unless `quiet`, prints its warnings (source images a glTF copy left out) on stderr, one line
-/// each. Returns the pixel format stored.
-PixelFormat writeTextureOutput(const std::string& out, const TexturedMesh& mesh, const Image& image,
-                               const std::string& slot, const std::string& bitDepth, bool quiet);
+/// Throws InvalidInputError naming --out if `out` asks for a glTF asset and the mesh was not read
+/// from glTF (`meshSource`); writeMeshTexture refuses this too, in words without the flag.
+void requireGltfMeshFor(const std::string& out, const std::filesystem::path& meshSource);
+
+/// Unless `quiet`, prints `warnings` (source images a glTF copy left out) on stderr, one line each.
+void printWarnings(bool quiet, const std::vector<std::string>& warnings);
 
 /// --bit-depth's value as a format; nullopt when empty (the command's default).
 std::optional<PixelFormat> requestedFormat(const std::string& bitDepth);
 
-/// Checks, right after parsing and before any file is read, that writeTextureOutput can write
+/// Checks, right after parsing and before any file is read, that writePagedTexture can write
 /// `out` for the mesh `meshSpec` with `bitDepth` (checkMeshTextureOutput): every command that
 /// writes calls this (or checkImageOutputArgs) first, so a bad output fails in no time.
 void checkTextureOutputArgs(const std::string& out, const std::string& meshSpec,

@@ -1,5 +1,6 @@
-// Texture pages in the `texgrad` subcommands: the layout logic is the io module's
-// (texture_pages.h); this file only chooses between one page (today's path) and several.
+// Texture pages in the `texgrad` subcommands: the layout logic and the choice between one image
+// and several pages are the io module's (texture_pages.h, mesh_texture_pages.h); this file adds
+// the CLI's fallbacks, error wording and messages.
 #include "cli_pages.h"
 
 #include <array>
@@ -11,46 +12,40 @@
 #include "texgrad/core/error.h"
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/mesh_texture.h"
+#include "texgrad/io/mesh_texture_pages.h"
 
 namespace texgrad::cli {
 
+namespace {
+
+/// `pages` as a PagedTexture: the placed mesh, or `mesh` itself on one page.
+PagedTexture pagedTexture(TexturedMesh mesh, MeshPages pages) {
+  PagedTexture paged;
+  paged.mesh = pages.placed ? std::move(*pages.placed) : std::move(mesh);
+  paged.layout = std::move(pages.layout);
+  return paged;
+}
+
+}  // namespace
+
 PagedTexture loadPagedTexture(TexturedMesh mesh, const std::string& meshSpec,
                               const std::string& explicitPath, const std::string& slot) {
-  PagedTexture paged;
-  paged.layout = findTexturePages(mesh, slot, explicitPath);
-  if (paged.layout.single() && !paged.layout.udim) {
-    paged.image = loadTexture(mesh, meshSpec, explicitPath, slot);
-    paged.layout.pages.front().width = paged.image.width;
-    paged.layout.pages.front().height = paged.image.height;
-    arrangePages(paged.layout);
-    paged.mesh = std::move(mesh);
-    return paged;
-  }
-  readPageSizes(paged.layout, mesh);
-  paged.image = readTexturePages(paged.layout, mesh);
-  paged.mesh = placeOnPages(mesh, paged.layout);
+  MeshTexturePages read = readMeshTexturePages(mesh, slot, explicitPath,
+                                               [&] { return missingTexture(meshSpec, slot); });
+  Image image = std::move(read.image);
+  PagedTexture paged = pagedTexture(std::move(mesh), std::move(read));
+  paged.image = std::move(image);
   return paged;
 }
 
 PagedTexture placeOnPagesOfSize(TexturedMesh mesh, int width, int height) {
-  PagedTexture paged;
-  paged.layout = findTexturePages(mesh, "baseColor");
-  for (TexturePage& page : paged.layout.pages) {
-    page.width = width;
-    page.height = height;
-  }
-  arrangePages(paged.layout);
-  paged.mesh = paged.layout.single() ? std::move(mesh) : placeOnPages(mesh, paged.layout);
-  return paged;
+  MeshPages pages = placeMeshOnPages(mesh, "baseColor", {}, std::pair(width, height));
+  return pagedTexture(std::move(mesh), std::move(pages));
 }
 
 std::optional<PagedTexture> placeOnPagesOfImages(const TexturedMesh& mesh) {
-  PagedTexture paged;
-  paged.layout = findTexturePages(mesh, "baseColor");
-  if (paged.layout.single() && !paged.layout.udim) return std::nullopt;
-  readPageSizes(paged.layout, mesh);
-  paged.mesh = placeOnPages(mesh, paged.layout);
-  return paged;
+  if (isOneImage(findTexturePages(mesh, "baseColor"))) return std::nullopt;
+  return pagedTexture(mesh, placeMeshOnPages(mesh, "baseColor", {}, std::nullopt));
 }
 
 void requireSinglePage(const PageLayout& layout, const std::string& option,
@@ -77,33 +72,14 @@ void checkPagedOutputArgs(const std::string& out, const PageLayout& layout,
 }
 
 PixelFormat writePagedTexture(const std::string& out, const TexturedMesh& mesh,
-                              const PageLayout& layout, const Image& image, const std::string& slot,
+                              const PageLayout& layout, const Image& image,
                               const std::string& bitDepth, bool quiet) {
-  if (layout.single() && !hasUdimToken(out))
-    return writeTextureOutput(out, mesh, image, slot, bitDepth, quiet);
-  checkPagedOutputArgs(out, layout, bitDepth);
-  if (isGltfPath(out)) {
-    const WrittenTexture written =
-        writeGltfTexturePages(out, mesh, layout, image, requestedFormat(bitDepth));
-    if (!quiet)
-      for (const std::string& warning : written.warnings)
-        std::cerr << "texgrad: warning: " << warning << "\n";
-    return written.stored;
-  }
-  PixelFormat stored = image.format;
-  for (size_t p = 0; p < layout.pages.size(); ++p)  // one page in memory at a time
-    stored = writeImage(pageOutputPath(out, layout, p), pageImage(layout, image, p),
-                        requestedFormat(bitDepth));
-  return stored;
-}
-
-PixelFormat writePagedImage(const std::string& out, const PageLayout& layout, const Image& image,
-                            PixelFormat format) {
-  if (layout.single() && !hasUdimToken(out)) return writeImage(out, image, format);
-  PixelFormat stored = format;
-  for (size_t p = 0; p < layout.pages.size(); ++p)
-    stored = writeImage(pageOutputPath(out, layout, p), pageImage(layout, image, p), format);
-  return stored;
+  requireGltfMeshFor(out, mesh.sourcePath);     // the io module's refusals, in the CLI's words
+  checkPagedOutputArgs(out, layout, bitDepth);  // (the commands checked both before the work)
+  const WrittenTexturePages written =
+      writeMeshTexturePages(out, mesh, layout, image, requestedFormat(bitDepth));
+  printWarnings(quiet, written.warnings);
+  return written.stored;
 }
 
 void printWrittenPages(bool quiet, const std::string& out, const PageLayout& layout,

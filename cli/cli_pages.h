@@ -7,6 +7,7 @@
 #include <string>
 
 #include "texgrad/io/image.h"
+#include "texgrad/io/mesh_texture_pages.h"
 #include "texgrad/io/texture_pages.h"
 #include "texgrad/io/textured_mesh.h"
 
@@ -60,16 +61,12 @@ void requireSinglePage(const PageLayout& layout, const std::string& option,
 void checkPagedOutputArgs(const std::string& out, const PageLayout& layout,
                           const std::string& bitDepth);
 
-/// Writes the layout image `image`: writeTextureOutput for one page; else each page to its
-/// pageOutputPath, or for a glTF `out` into the copy in place of its image
-/// (writeGltfTexturePages). Returns the pixel format stored.
+/// Writes the layout image `image` of the layout's slot with writeMeshTexturePages (one image,
+/// one image per page at its pageOutputPath, or a glTF copy), `bitDepth` as parsePixelFormat
+/// (empty: the image's); unless `quiet`, prints its warnings. Returns the pixel format stored.
 PixelFormat writePagedTexture(const std::string& out, const TexturedMesh& mesh,
-                              const PageLayout& layout, const Image& image, const std::string& slot,
+                              const PageLayout& layout, const Image& image,
                               const std::string& bitDepth, bool quiet);
-
-/// The same for an output that is always an image file (writeImage in `format`).
-PixelFormat writePagedImage(const std::string& out, const PageLayout& layout, const Image& image,
-                            PixelFormat format);
 
 /// printWritten for a paged output: one line naming every page file written.
 void printWrittenPages(bool quiet, const std::string& out, const PageLayout& layout,

@@ -49,8 +49,8 @@ void runDilate(const DilateArgs& args) {
   const TexelGrid grid = buildTexelGrid(mesh, atlas, texture.width, texture.height);
   const Image padded = dilateGutters(mesh, atlas, grid, texture, args.options);
   timer.lap("dilate");
-  const PixelFormat stored = writePagedTexture(args.out, mesh, paged.layout, padded, args.slot,
-                                               args.bitDepth, args.report.quiet);
+  const PixelFormat stored =
+      writePagedTexture(args.out, mesh, paged.layout, padded, args.bitDepth, args.report.quiet);
   timer.lap("write");
   printWrittenPages(args.report.quiet, args.out, paged.layout, padded, stored, -1, timer.total());
   if (args.report.timings) timer.print();

@@ -63,8 +63,8 @@ void runFilter(FilterArgs args) {
                                             std::move(paged.image), args.options, progress);
   timer.lap("solve");
   const PixelFormat stored = runStage(progress, "write", [&] {
-    return writePagedTexture(args.out, domain.mesh(), paged.layout, result.image, args.slot,
-                             args.bitDepth, args.report.quiet);
+    return writePagedTexture(args.out, domain.mesh(), paged.layout, result.image, args.bitDepth,
+                             args.report.quiet);
   });
   timer.lap("write");
   printWrittenPages(args.report.quiet, args.out, paged.layout, result.image, stored,

@@ -68,8 +68,8 @@ void runLic(LicArgs args) {
   timer.lap("solve");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
   const PixelFormat stored = runStage(progress, "write", [&] {
-    return writePagedTexture(args.out, domain.mesh(), paged.layout, padded, "baseColor",
-                             args.bitDepth, args.report.quiet);
+    return writePagedTexture(args.out, domain.mesh(), paged.layout, padded, args.bitDepth,
+                             args.report.quiet);
   });
   timer.lap("write");
   printWrittenPages(args.report.quiet, args.out, paged.layout, padded, stored, domain.unknowns(),

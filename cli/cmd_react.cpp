@@ -64,8 +64,8 @@ void runReact(ReactArgs args) {
   timer.lap("steps");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
   const PixelFormat stored = runStage(progress, "write", [&] {
-    return writePagedTexture(args.out, domain.mesh(), paged.layout, padded, "baseColor",
-                             args.bitDepth, args.report.quiet);
+    return writePagedTexture(args.out, domain.mesh(), paged.layout, padded, args.bitDepth,
+                             args.report.quiet);
   });
   timer.lap("write");
   printWrittenPages(args.report.quiet, args.out, paged.layout, padded, stored, domain.unknowns(),

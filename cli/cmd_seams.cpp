@@ -43,8 +43,8 @@ void runSeams(const SeamsArgs& args) {
               << " texels kept as they are: no fixed texel ties them to the rest (charts too "
                  "thin for an interior texel at this resolution, or a mask over whole charts)\n";
   const PixelFormat stored = runStage(progress, "write", [&] {
-    return writePagedTexture(args.out, domain.mesh(), paged.layout, result.image, args.slot,
-                             args.bitDepth, args.report.quiet);
+    return writePagedTexture(args.out, domain.mesh(), paged.layout, result.image, args.bitDepth,
+                             args.report.quiet);
   });
   timer.lap("write");
   printWrittenPages(args.report.quiet, args.out, paged.layout, result.image, stored,

@@ -103,8 +103,8 @@ void runStitch(StitchArgs args) {
                     : stitchPartials(domain, partials, confidences, args.options, progress);
   timer.lap("solve");
   const PixelFormat stored = runStage(progress, "write", [&] {
-    return writePagedTexture(args.out, domain.mesh(), layout, result.image, "baseColor",
-                             args.bitDepth, args.report.quiet);
+    return writePagedTexture(args.out, domain.mesh(), layout, result.image, args.bitDepth,
+                             args.report.quiet);
   });
   timer.lap("write");
   printWrittenPages(args.report.quiet, args.out, layout, result.image, stored, domain.unknowns(),

@@ -83,8 +83,8 @@ void runTexture(TextureArgs args) {
       dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image, args.dilate);
   timer.lap("dilate");
   const PixelFormat stored = runStage(progress, "write", [&] {
-    return writePagedTexture(args.out, domain.mesh(), paged.layout, padded, "baseColor",
-                             args.bitDepth, args.report.quiet);
+    return writePagedTexture(args.out, domain.mesh(), paged.layout, padded, args.bitDepth,
+                             args.report.quiet);
   });
   timer.lap("write");
   printWrittenPages(args.report.quiet, args.out, paged.layout, padded, stored, domain.unknowns(),

@@ -1,22 +1,21 @@
 // Texture pages from Python (docs/python.md, Texture pages): a texture spread over several images
 // (UDIM tiles, one image per material) read as one layout image with the mesh placed on it, cut
 // back into its pages, and written one image per page (or into a glTF copy) with the CLI's names.
-// The layout logic is the io module's (texture_pages.h); this file converts and chooses between
-// one page and several as cli/cli_pages.cpp does.
+// The layout logic and the choice between one image and several pages are the io module's
+// (texture_pages.h, mesh_texture_pages.h); this file converts arguments and results.
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
 #include <filesystem>
 #include <optional>
 #include <string>
-#include <tuple>
 #include <utility>
 #include <vector>
 
 #include "bindings.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/image_io.h"
-#include "texgrad/io/mesh_texture.h"
+#include "texgrad/io/mesh_texture_pages.h"
 #include "texgrad/io/texture_pages.h"
 
 namespace texgrad::python {
@@ -29,40 +28,29 @@ struct PagesHandle {
   std::shared_ptr<TexturedMesh> mesh;  ///< UVs in the layout's UV space
 };
 
-/// One page (the mesh's texture or `texture`) read as today's single image, the mesh unchanged.
-Image readSinglePage(PagesHandle& pages, const std::shared_ptr<TexturedMesh>& mesh,
-                     const std::string& slot, const std::filesystem::path& texture) {
-  std::optional<Image> image;
-  if (!texture.empty())
-    image = readImage(texture);
-  else
-    image = readMeshTexture(*mesh, slot);
-  if (!image)
-    throw InvalidInputError(
-        (mesh->sourcePath.empty() ? std::string("the mesh") : mesh->sourcePath.string()) +
-        " references no " + slot + " texture; pass the image file as texture=");
-  pages.layout.pages.front().width = image->width;
-  pages.layout.pages.front().height = image->height;
-  arrangePages(pages.layout);
-  pages.mesh = mesh;
-  return std::move(*image);
+/// `pages` as a handle: the placed mesh, or `mesh` itself on one page.
+std::shared_ptr<PagesHandle> pagesHandle(const std::shared_ptr<TexturedMesh>& mesh,
+                                         MeshPages pages) {
+  auto handle = std::make_shared<PagesHandle>();
+  handle->layout = std::move(pages.layout);
+  handle->mesh = pages.placed ? std::make_shared<TexturedMesh>(std::move(*pages.placed)) : mesh;
+  return handle;
 }
 
 py::tuple readPages(const std::shared_ptr<TexturedMesh>& mesh, const std::string& slot,
                     const std::optional<std::filesystem::path>& texture, const py::object& dtype) {
-  auto pages = std::make_shared<PagesHandle>();
+  std::shared_ptr<PagesHandle> pages;
   Image image;
   {
     py::gil_scoped_release release;
-    const std::filesystem::path path = texture.value_or(std::filesystem::path());
-    pages->layout = findTexturePages(*mesh, slot, path);
-    if (pages->layout.single() && !pages->layout.udim) {
-      image = readSinglePage(*pages, mesh, slot, path);
-    } else {
-      readPageSizes(pages->layout, *mesh);  // a missing page: IoError naming its file
-      image = readTexturePages(pages->layout, *mesh);
-      pages->mesh = std::make_shared<TexturedMesh>(placeOnPages(*mesh, pages->layout));
-    }
+    MeshTexturePages read = readMeshTexturePages(
+        *mesh, slot, texture.value_or(std::filesystem::path()), [&]() -> Image {
+          throw InvalidInputError(
+              (mesh->sourcePath.empty() ? std::string("the mesh") : mesh->sourcePath.string()) +
+              " references no " + slot + " texture; pass the image file as texture=");
+        });
+    image = std::move(read.image);
+    pages = pagesHandle(mesh, std::move(read));
   }
   const SampleType type = sampleTypeFrom(dtype, sampleTypeOf(image.format));
   py::array array = arrayFromImage(std::move(image), type, false);
@@ -73,19 +61,11 @@ py::tuple placePages(const std::shared_ptr<TexturedMesh>& mesh, const py::object
                      const std::string& slot, const std::optional<std::filesystem::path>& texture) {
   std::optional<std::pair<int, int>> size;
   if (!resolution.is_none()) size = resolutionFrom(resolution);
-  auto pages = std::make_shared<PagesHandle>();
+  std::shared_ptr<PagesHandle> pages;
   {
     py::gil_scoped_release release;
-    pages->layout = findTexturePages(*mesh, slot, texture.value_or(std::filesystem::path()));
-    if (size) {  // a texture an app makes (geodesic, lic, react, mask): every page this size
-      for (TexturePage& page : pages->layout.pages) std::tie(page.width, page.height) = *size;
-      arrangePages(pages->layout);
-    } else {
-      readPageSizes(pages->layout, *mesh);  // the sizes of the page images (headers only)
-    }
-    pages->mesh = pages->layout.single()
-                      ? mesh
-                      : std::make_shared<TexturedMesh>(placeOnPages(*mesh, pages->layout));
+    pages = pagesHandle(
+        mesh, placeMeshOnPages(*mesh, slot, texture.value_or(std::filesystem::path()), size));
   }
   return py::make_tuple(pages->mesh, pages);
 }
@@ -138,33 +118,18 @@ std::vector<std::string> outputPaths(const PagesHandle& pages, const std::filesy
 std::vector<std::string> writePages(const std::filesystem::path& out, const PagesHandle& pages,
                                     const py::handle& image,
                                     const std::optional<std::string>& bitDepth) {
-  const ImageArgument argument = layoutImage(pages, image);
+  const ImageArgument argument = layoutImage(pages, image);  // its format: the array's dtype
   const std::optional<PixelFormat> requested =
       bitDepth ? std::optional<PixelFormat>(parsePixelFormat(*bitDepth)) : std::nullopt;
-  const PixelFormat format = requested.value_or(formatOf(argument.sampleType));
-  const PageLayout& layout = pages.layout;
-  std::vector<std::string> warnings;
-  std::vector<std::string> written;
+  WrittenTexturePages result;
   {
     py::gil_scoped_release release;
-    if (isGltfPath(out)) {
-      checkMeshTextureOutput(out, pages.mesh->sourcePath, requested);
-      const WrittenTexture result =
-          layout.single() ? writeMeshTexture(out, *pages.mesh, argument.image, layout.slot, format)
-                          : writeGltfTexturePages(out, *pages.mesh, layout, argument.image, format);
-      warnings = result.warnings;
-      written.push_back(out.string());
-    } else {
-      for (size_t p = 0; p < layout.pages.size(); ++p)  // every file checked before any write
-        checkImageOutput(pageOutputPath(out, layout, p), requested);
-      for (size_t p = 0; p < layout.pages.size(); ++p) {  // one page in memory at a time
-        written.push_back(pageOutputPath(out, layout, p).string());
-        writeImage(written.back(), pageImage(layout, argument.image, p), format);
-      }
-    }
+    result = writeMeshTexturePages(out, *pages.mesh, pages.layout, argument.image, requested);
   }
-  for (const std::string& warning : warnings)
+  for (const std::string& warning : result.warnings)
     if (PyErr_WarnEx(PyExc_UserWarning, warning.c_str(), 1) != 0) throw py::error_already_set();
+  std::vector<std::string> written;
+  for (const std::filesystem::path& file : result.files) written.push_back(file.string());
   return written;
 }
 

@@ -369,6 +369,23 @@ void writeTiledPhotoScene(const std::filesystem::path& dir) {
   writeCameraJson(dir / "cameras.json", capture.cameras);
 }
 
+/// The scene's mesh: tiles.obj, or single.obj.
+std::string sceneMesh(bool tiles) {
+  return tiles ? "tiles.obj" : "single.obj";
+}
+
+/// The scene's -r: one tile's size for tiles.obj, the four tiles' image for single.obj.
+std::string sceneResolution(bool tiles) {
+  return std::to_string(tiles ? kTileTexels : 2 * kTileTexels);
+}
+
+/// `head` followed by `tail`.
+std::vector<std::string> joined(std::vector<std::string> head,
+                                const std::vector<std::string>& tail) {
+  head.insert(head.end(), tail.begin(), tail.end());
+  return head;
+}
+
 /// The largest difference between the 2 x 2 tiles `tiles` (NAME -> file) and the quadrants of
 /// `whole`, and the largest magnitude in `whole`.
 std::pair<double, double> tilesVersusQuadrants(const std::function<Image(const char*)>& tiles,
@@ -396,12 +413,12 @@ TEST(CliPages, TextureFromPhotosOverUdimTilesMatchesTheSingleImage) {
   const std::vector<std::string> options{
       "--cameras", "cameras.json", "--images", "images", "--dilate-radius", "0", "--solver",
       "direct",    "--bit-depth",  "float",    "-q"};
-  std::vector<std::string> paged{"texture", "tiles.obj",   "-r", std::to_string(kTileTexels),
-                                 "--out",   "t.<UDIM>.exr"},
-      one{"texture", "single.obj", "-r", std::to_string(2 * kTileTexels), "--out", "s.exr"};
-  paged.insert(paged.end(), options.begin(), options.end());
-  one.insert(one.end(), options.begin(), options.end());
-  const CliResult a = runCli(paged, dir), b = runCli(one, dir);
+  const auto texture = [&](bool tiles, const std::string& out) {
+    return runCli(
+        joined({"texture", sceneMesh(tiles), "-r", sceneResolution(tiles), "--out", out}, options),
+        dir);
+  };
+  const CliResult a = texture(true, "t.<UDIM>.exr"), b = texture(false, "s.exr");
   ASSERT_EQ(a.status, 0) << a.err;
   ASSERT_EQ(b.status, 0) << b.err;
   const auto [worst, range] = tilesVersusQuadrants(
@@ -416,12 +433,13 @@ TEST(CliPages, ProjectAndStitchOverUdimTilesMatchTheSingleImage) {
   const auto dir = tempDir("cli_pages_stitch");
   writeTiledPhotoScene(dir);
   const std::vector<std::string> photos{"--cameras", "cameras.json", "--images", "images", "-q"};
-  std::vector<std::string> projectTiles{"project",   "tiles.obj", "-r", std::to_string(kTileTexels),
-                                        "--out-dir", "pt"},
-      projectOne{"project", "single.obj", "-r", std::to_string(2 * kTileTexels), "--out-dir", "ps"};
-  projectTiles.insert(projectTiles.end(), photos.begin(), photos.end());
-  projectOne.insert(projectOne.end(), photos.begin(), photos.end());
-  const CliResult pa = runCli(projectTiles, dir), pb = runCli(projectOne, dir);
+  const auto project = [&](bool tiles, const std::string& outDir) {
+    return runCli(
+        joined({"project", sceneMesh(tiles), "-r", sceneResolution(tiles), "--out-dir", outDir},
+               photos),
+        dir);
+  };
+  const CliResult pa = project(true, "pt"), pb = project(false, "ps");
   ASSERT_EQ(pa.status, 0) << pa.err;
   ASSERT_EQ(pb.status, 0) << pb.err;
   // Each view's partial is written per tile: its tiles are the single image's quadrants.
@@ -433,17 +451,13 @@ TEST(CliPages, ProjectAndStitchOverUdimTilesMatchTheSingleImage) {
   EXPECT_GT(partialRange, 0.1);
   EXPECT_LT(partialWorst, kPagesCliTolerance);
   const std::vector<std::string> solve{"--solver", "direct", "--bit-depth", "float", "-q"};
-  std::vector<std::string> stitchTiles{"stitch",       "tiles.obj",
-                                       "--partials",   "pt/partial-%02d.png",
-                                       "--confidence", "pt/confidence-%02d.png",
-                                       "--out",        "t.<UDIM>.exr"},
-      stitchOne{"stitch",       "single.obj",
-                "--partials",   "ps/partial-%02d.png",
-                "--confidence", "ps/confidence-%02d.png",
-                "--out",        "s.exr"};
-  stitchTiles.insert(stitchTiles.end(), solve.begin(), solve.end());
-  stitchOne.insert(stitchOne.end(), solve.begin(), solve.end());
-  const CliResult a = runCli(stitchTiles, dir), b = runCli(stitchOne, dir);
+  const auto stitch = [&](bool tiles, const std::string& views, const std::string& out) {
+    return joined({"stitch", sceneMesh(tiles), "--partials", views + "/partial-%02d.png",
+                   "--confidence", views + "/confidence-%02d.png", "--out", out},
+                  solve);
+  };
+  const std::vector<std::string> stitchTiles = stitch(true, "pt", "t.<UDIM>.exr");
+  const CliResult a = runCli(stitchTiles, dir), b = runCli(stitch(false, "ps", "s.exr"), dir);
   ASSERT_EQ(a.status, 0) << a.err;
   ASSERT_EQ(b.status, 0) << b.err;
   const auto [worst, range] = tilesVersusQuadrants(
