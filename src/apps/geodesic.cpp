@@ -15,6 +15,8 @@
 #include <cstddef>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "apps/closest_point.h"
 #include "apps/geodesic_gradients.h"
@@ -58,6 +60,46 @@ std::pair<double, double> eigenvalues(const Eigen::Matrix2d& m) {
   const double half = 0.5 * (m(0, 0) - m(1, 1));
   const double radius = std::sqrt(half * half + m(0, 1) * m(0, 1));
   return {mean - radius, mean + radius};
+}
+
+/// A1 = alpha M + S (paper Eq. 5), formed on M's pattern in one copy of it. (An Eigen sum of
+/// sparse matrices grows its result by doubling: up to twice the entries' storage, 166 MB of
+/// slack per system at spot 2048², docs/memory.md.)
+Eigen::SparseMatrix<double> heatSystem(const TexelOperators& ops, double alpha) {
+  return ops.combined([alpha](Eigen::Index, Eigen::Index, double mass, double stiffness) {
+    return alpha * mass + stiffness;
+  });
+}
+
+/// a += b where b's entries all lie in a's pattern (compressed a, sorted inner indices);
+/// otherwise a = a + b (the union of the patterns).
+void addInPattern(Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix<double>& b) {
+  const int* outer = a.outerIndexPtr();
+  const int* inner = a.innerIndexPtr();
+  std::vector<std::pair<Eigen::Index, double>> updates;  // (position in a, value of b)
+  for (int j = 0; j < b.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(b, j); it; ++it) {
+      const int* found =
+          std::lower_bound(inner + outer[j], inner + outer[j + 1], static_cast<int>(it.row()));
+      if (found == inner + outer[j + 1] || *found != it.row()) {
+        a = a + b;
+        return;
+      }
+      updates.emplace_back(found - inner, it.value());
+    }
+  for (const auto& [k, value] : updates) a.valuePtr()[k] += value;
+}
+
+/// A2 = S + eps M + G (see GeodesicSolver), formed as heatSystem is: S + eps M on M's
+/// pattern, then the ghost penalty G (entries on cut cells' texels, within that pattern).
+Eigen::SparseMatrix<double> distanceSystem(const TexelOperators& ops,
+                                           const Eigen::SparseMatrix<double>& ghost) {
+  Eigen::SparseMatrix<double> a =
+      ops.combined([](Eigen::Index, Eigen::Index, double mass, double stiffness) {
+        return stiffness + GeodesicSolver::kDistanceScreening * mass;
+      });
+  addInPattern(a, ghost);
+  return a;
 }
 
 }  // namespace
@@ -176,13 +218,12 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
   scale_ = std::sqrt(area);
   gradients_ = std::make_unique<GeodesicGradients>(domain, options_.solver.multigrid.threads);
   // A1 and A2 live in their solvers only (SystemSolver::matrix()).
-  diffusionSolver_.initAndUpdate(options_.alpha * ops.mass() + ops.stiffness(),
+  diffusionSolver_.initAndUpdate(heatSystem(ops, options_.alpha),
                                  renameStage(progress, "heat setup"));
   // The cut-cell ghost penalty keeps barely covered texels from amplifying the inconsistency
   // of the normalised gradient (see Gradients::stabiliser).
-  distanceSolver_.initAndUpdate(
-      ops.stiffness() + kDistanceScreening * ops.mass() + gradients_->stabiliser(domain.unknowns()),
-      renameStage(progress, "distance setup"));
+  distanceSolver_.initAndUpdate(distanceSystem(ops, gradients_->stabiliser(domain.unknowns())),
+                                renameStage(progress, "distance setup"));
   labelComponents();
   if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
     buildDirichlet(progress);
@@ -261,7 +302,7 @@ void GeodesicSolver::Impl::setAlpha(double alpha) {
   next.validate();
   options_ = next;
   const TexelOperators& ops = domain_->operators();
-  diffusionSolver_.update(options_.alpha * ops.mass() + ops.stiffness());
+  diffusionSolver_.update(heatSystem(ops, options_.alpha));
   if (dirichletSolver_) updateDirichlet();
   resetIterates();
 }
