@@ -144,12 +144,19 @@ GeodesicOptions GeodesicOptions::interactive() {
 
 /// The solver's state: both systems, the sources and the iterates (see GeodesicSolver).
 struct GeodesicSolver::Impl {
-  Impl(const TexelDomain& domain, const GeodesicOptions& options, const ProgressCallback& progress);
+  /// With `oneShot`, the distance system is set up only by solveOnce(), after the heat solve.
+  Impl(const TexelDomain& domain, const GeodesicOptions& options, const ProgressCallback& progress,
+       bool oneShot = false);
   void setAlpha(double alpha);
   void setSources(std::span<const GeodesicSource> sources);
   void update();
   double residual() const;
   void solve(const ProgressCallback& progress);
+  /// solve() for a one-shot Impl, with one system's solver alive at a time: the heat solve, then
+  /// the heat solvers, the impulse and the heat are freed before the distance system is set up
+  /// (at spot 2048² a solver holds ~250 MB of hierarchy besides its 244 MB copy of A). The
+  /// object can do nothing but report its results afterwards.
+  void solveOnce(const ProgressCallback& progress);
   const Eigen::MatrixXd& diffused() const { return dirichletSolver_ ? heat_ : u_; }
 
   /// Interior texel near a source with its chord distance (unit-area units), for NearField.
@@ -174,7 +181,11 @@ struct GeodesicSolver::Impl {
   void requireSources() const;
   void resetIterates();
   void diffusionStep(bool full, const ProgressCallback& progress = {});
+  /// The divergence of the normalised gradient of diffused(), if the heat changed since the last.
+  void computeDivergence();
   void distanceStep(bool full, const ProgressCallback& progress = {});
+  /// Sets up the distance solver on A2 (see GeodesicSolver), reporting "distance setup".
+  void setUpDistance(const ProgressCallback& progress);
 
   const TexelDomain* domain_;
   GeodesicOptions options_;
@@ -203,7 +214,7 @@ struct GeodesicSolver::Impl {
 };
 
 GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& options,
-                           const ProgressCallback& progress)
+                           const ProgressCallback& progress, bool oneShot)
     : domain_(&domain),
       options_([&] {
         options.validate();
@@ -220,10 +231,7 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
   // A1 and A2 live in their solvers only (SystemSolver::matrix()).
   diffusionSolver_.initAndUpdate(heatSystem(ops, options_.alpha),
                                  renameStage(progress, "heat setup"));
-  // The cut-cell ghost penalty keeps barely covered texels from amplifying the inconsistency
-  // of the normalised gradient (see Gradients::stabiliser).
-  distanceSolver_.initAndUpdate(distanceSystem(ops, gradients_->stabiliser(domain.unknowns())),
-                                renameStage(progress, "distance setup"));
+  if (!oneShot) setUpDistance(progress);
   labelComponents();
   if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
     buildDirichlet(progress);
@@ -242,6 +250,14 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
   impulse_ = Eigen::MatrixXd::Zero(n, 1);
   resetIterates();
   timings_.setup = secondsSince(start);
+}
+
+void GeodesicSolver::Impl::setUpDistance(const ProgressCallback& progress) {
+  // The cut-cell ghost penalty keeps barely covered texels from amplifying the inconsistency
+  // of the normalised gradient (see Gradients::stabiliser).
+  distanceSolver_.initAndUpdate(
+      distanceSystem(domain_->operators(), gradients_->stabiliser(domain_->unknowns())),
+      renameStage(progress, "distance setup"));
 }
 
 void GeodesicSolver::Impl::buildDirichlet(const ProgressCallback& progress) {
@@ -289,8 +305,10 @@ void GeodesicSolver::Impl::resetIterates() {
   heatResidual_ = std::numeric_limits<double>::infinity();
   heatChanged_ = true;
   u_ = Eigen::MatrixXd::Zero(n, 1);
-  uDirichlet_ = Eigen::MatrixXd::Zero(n, 1);
-  heat_ = Eigen::MatrixXd::Zero(n, 1);
+  // The Dirichlet diffusion and the mean exist only with a Dirichlet solver (diffused()).
+  const int dirichletRows = dirichletSolver_ ? n : 0;
+  uDirichlet_ = Eigen::MatrixXd::Zero(dirichletRows, 1);
+  heat_ = Eigen::MatrixXd::Zero(dirichletRows, 1);
   divergence_ = Eigen::MatrixXd::Zero(n, 1);
   y_ = Eigen::MatrixXd::Zero(n, 1);
   distances_ = Eigen::VectorXd::Zero(n);
@@ -330,9 +348,11 @@ void GeodesicSolver::Impl::setSources(std::span<const GeodesicSource> sources) {
   sources_ = std::move(resolved);
   sourceWeights_ = std::move(weights);
   impulse_ = std::move(impulse);
-  impulseDirichlet_ = impulse_;
-  for (size_t u = 0; u < dirichlet_.size(); ++u)
-    if (dirichlet_[u]) impulseDirichlet_(static_cast<Eigen::Index>(u), 0) = 0.0;
+  if (dirichletSolver_) {
+    impulseDirichlet_ = impulse_;
+    for (size_t u = 0; u < dirichlet_.size(); ++u)
+      if (dirichlet_[u]) impulseDirichlet_(static_cast<Eigen::Index>(u), 0) = 0.0;
+  }
   collectNearField();
   findReachable();
   resetIterates();
@@ -544,6 +564,7 @@ void GeodesicSolver::Impl::requireSources() const {
 void GeodesicSolver::Impl::diffusionStep(bool full, const ProgressCallback& progress) {
   const auto start = Clock::now();
   timings_.diffusion = 0.0;
+  timings_.divergence = 0.0;
   if (!full && heatSettled_) return;  // u, and so the divergence, stay as they are
   diffusionReport_ = full
                          ? diffusionSolver_.solve(impulse_, u_, renameStage(progress, "heat solve"))
@@ -566,14 +587,17 @@ void GeodesicSolver::Impl::diffusionStep(bool full, const ProgressCallback& prog
   timings_.diffusion = secondsSince(start);
 }
 
-void GeodesicSolver::Impl::distanceStep(bool full, const ProgressCallback& progress) {
-  auto start = Clock::now();
-  if (heatChanged_) {
-    gradients_->divergence(diffused().data(), divergence_.data(), divergence_.rows());
-    heatChanged_ = false;
-  }
+void GeodesicSolver::Impl::computeDivergence() {
+  if (!heatChanged_) return;
+  const auto start = Clock::now();
+  gradients_->divergence(diffused().data(), divergence_.data(), divergence_.rows());
+  heatChanged_ = false;
   timings_.divergence = secondsSince(start);
-  start = Clock::now();
+}
+
+void GeodesicSolver::Impl::distanceStep(bool full, const ProgressCallback& progress) {
+  computeDivergence();
+  const auto start = Clock::now();
   distanceReport_ =
       full ? distanceSolver_.solve(divergence_, y_, renameStage(progress, "distance solve"))
            : distanceSolver_.refine(divergence_, y_, false);
@@ -611,6 +635,19 @@ double GeodesicSolver::Impl::residual() const {
 void GeodesicSolver::Impl::solve(const ProgressCallback& progress) {
   requireSources();
   diffusionStep(true, progress);
+  distanceStep(true, progress);
+}
+
+void GeodesicSolver::Impl::solveOnce(const ProgressCallback& progress) {
+  requireSources();
+  diffusionStep(true, progress);
+  computeDivergence();  // while diffused() is still the mean, if there is a Dirichlet solver
+  diffusionSolver_ = SystemSolver(domain_->grid(), options_.solver);
+  dirichletSolver_.reset();
+  impulse_ = impulseDirichlet_ = u_ = uDirichlet_ = heat_ = Eigen::MatrixXd();
+  const auto start = Clock::now();
+  setUpDistance(progress);
+  timings_.setup += secondsSince(start);
   distanceStep(true, progress);
 }
 
@@ -675,15 +712,15 @@ const GeodesicOptions& GeodesicSolver::options() const {
 
 GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,
                                 const GeodesicOptions& options, const ProgressCallback& progress) {
-  GeodesicSolver solver(domain, options, progress);
+  GeodesicSolver::Impl solver(domain, options, progress, true);
   solver.setSources(sources);
-  solver.solve(progress);
+  solver.solveOnce(progress);
   GeodesicResult result;
-  result.distances = solver.distances();
-  result.sources = solver.sources();
-  result.diffusionReport = solver.diffusionReport();
-  result.distanceReport = solver.distanceReport();
-  result.timings = solver.timings();
+  result.distances = std::move(solver.distances_);
+  result.sources = std::move(solver.sources_);
+  result.diffusionReport = std::move(solver.diffusionReport_);
+  result.distanceReport = std::move(solver.distanceReport_);
+  result.timings = solver.timings_;
   // Farthest texel among those whose centre lies on M (gutter texels extrapolate past the
   // boundary); any reachable texel if no centre does (charts narrower than a texel).
   const TexelGrid& grid = domain.grid();

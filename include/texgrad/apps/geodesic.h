@@ -190,6 +190,11 @@ class GeodesicSolver {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+  /// Runs an Impl that keeps one system's solver at a time (Impl::solveOnce).
+  friend GeodesicResult geodesicDistance(const TexelDomain& domain,
+                                         std::span<const GeodesicSource> sources,
+                                         const GeodesicOptions& options,
+                                         const ProgressCallback& progress);
 };
 
 /// One-shot heat-method distances from `sources` (at least one): GeodesicSolver + solve(), plus
