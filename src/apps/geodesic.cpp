@@ -144,7 +144,8 @@ GeodesicOptions GeodesicOptions::interactive() {
 
 /// The solver's state: both systems, the sources and the iterates (see GeodesicSolver).
 struct GeodesicSolver::Impl {
-  /// With `oneShot`, the distance system is set up only by solveOnce(), after the heat solve.
+  /// With `oneShot`, the gradient samples, the distance system and the distance step's vectors
+  /// are made only by solveOnce(), after the heat solve.
   Impl(const TexelDomain& domain, const GeodesicOptions& options, const ProgressCallback& progress,
        bool oneShot = false);
   void setAlpha(double alpha);
@@ -153,11 +154,12 @@ struct GeodesicSolver::Impl {
   double residual() const;
   void solve(const ProgressCallback& progress);
   /// solve() for a one-shot Impl, with one system's solver alive at a time: the heat solve, then
-  /// the heat solvers, the impulse and the heat are freed before the distance system is set up
-  /// (at spot 2048² a solver holds ~250 MB of hierarchy besides its 244 MB copy of A). The
-  /// object can do nothing but report its results afterwards.
+  /// the heat solvers and the impulse are freed, the gradient samples built for the divergence
+  /// and the ghost penalty and freed with the heat before the distance system is set up (at spot
+  /// 2048² a solver holds ~250 MB of hierarchy besides its 244 MB copy of A, the samples 144
+  /// MB). The object can do nothing but report its results afterwards.
   void solveOnce(const ProgressCallback& progress);
-  const Eigen::MatrixXd& diffused() const { return dirichletSolver_ ? heat_ : u_; }
+  const Eigen::MatrixXd& diffused() const { return averaged_ ? heat_ : u_; }
 
   /// Interior texel near a source with its chord distance (unit-area units), for NearField.
   struct NearFieldTexel {
@@ -183,9 +185,12 @@ struct GeodesicSolver::Impl {
   void diffusionStep(bool full, const ProgressCallback& progress = {});
   /// The divergence of the normalised gradient of diffused(), if the heat changed since the last.
   void computeDivergence();
+  /// Builds gradients_ (samples of the basis gradients, on the solver's threads).
+  void makeGradients();
   void distanceStep(bool full, const ProgressCallback& progress = {});
-  /// Sets up the distance solver on A2 (see GeodesicSolver), reporting "distance setup".
-  void setUpDistance(const ProgressCallback& progress);
+  /// Sets up the distance solver on A2 with the ghost penalty `ghost` (see GeodesicSolver),
+  /// reporting "distance setup".
+  void setUpDistance(const Eigen::SparseMatrix<double>& ghost, const ProgressCallback& progress);
 
   const TexelDomain* domain_;
   GeodesicOptions options_;
@@ -193,6 +198,8 @@ struct GeodesicSolver::Impl {
   std::unique_ptr<GeodesicGradients> gradients_;
   SystemSolver diffusionSolver_, distanceSolver_;
   std::unique_ptr<SystemSolver> dirichletSolver_;  ///< only with Average on meshes with boundary
+  bool averaged_ = false;  ///< the heat is the mean of two diffusions (a Dirichlet solver is made)
+  bool oneShot_ = false;   ///< see the constructor
   std::vector<uint8_t> dirichlet_;  ///< per unknown: held at zero in the Dirichlet diffusion
   int dirichletCount_ = 0;
   std::vector<ResolvedSource> sources_;
@@ -222,16 +229,19 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
       }()),
       diffusionSolver_(domain.grid(), options.solver, MatrixCopy::Kept),  // matrix() read below
       distanceSolver_(domain.grid(), options.solver) {
+  oneShot_ = oneShot;
   const auto start = Clock::now();
   const TexelOperators& ops = domain.operators();
   const double area = ops.report().metric.surfaceArea;
   if (!(area > 0.0)) throw InvalidInputError("the mesh has zero surface area; no distances exist");
   scale_ = std::sqrt(area);
-  gradients_ = std::make_unique<GeodesicGradients>(domain, options_.solver.multigrid.threads);
+  if (!oneShot) makeGradients();
   // A1 and A2 live in their solvers only (SystemSolver::matrix()).
   diffusionSolver_.initAndUpdate(heatSystem(ops, options_.alpha),
                                  renameStage(progress, "heat setup"));
-  if (!oneShot) setUpDistance(progress);
+  // The cut-cell ghost penalty keeps barely covered texels from amplifying the inconsistency
+  // of the normalised gradient (see Gradients::stabiliser).
+  if (!oneShot) setUpDistance(gradients_->stabiliser(domain.unknowns()), progress);
   labelComponents();
   if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
     buildDirichlet(progress);
@@ -252,12 +262,14 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
   timings_.setup = secondsSince(start);
 }
 
-void GeodesicSolver::Impl::setUpDistance(const ProgressCallback& progress) {
-  // The cut-cell ghost penalty keeps barely covered texels from amplifying the inconsistency
-  // of the normalised gradient (see Gradients::stabiliser).
-  distanceSolver_.initAndUpdate(
-      distanceSystem(domain_->operators(), gradients_->stabiliser(domain_->unknowns())),
-      renameStage(progress, "distance setup"));
+void GeodesicSolver::Impl::makeGradients() {
+  gradients_ = std::make_unique<GeodesicGradients>(*domain_, options_.solver.multigrid.threads);
+}
+
+void GeodesicSolver::Impl::setUpDistance(const Eigen::SparseMatrix<double>& ghost,
+                                         const ProgressCallback& progress) {
+  distanceSolver_.initAndUpdate(distanceSystem(domain_->operators(), ghost),
+                                renameStage(progress, "distance setup"));
 }
 
 void GeodesicSolver::Impl::buildDirichlet(const ProgressCallback& progress) {
@@ -284,6 +296,7 @@ void GeodesicSolver::Impl::buildDirichlet(const ProgressCallback& progress) {
   }
   dirichletCount_ = static_cast<int>(std::count(dirichlet_.begin(), dirichlet_.end(), 1));
   dirichletSolver_ = std::make_unique<SystemSolver>(grid, options_.solver);
+  averaged_ = true;
   dirichletSolver_->init(diffusionSolver_.matrix());
   updateDirichlet(renameStage(progress, "dirichlet heat setup"));
 }
@@ -305,13 +318,14 @@ void GeodesicSolver::Impl::resetIterates() {
   heatResidual_ = std::numeric_limits<double>::infinity();
   heatChanged_ = true;
   u_ = Eigen::MatrixXd::Zero(n, 1);
-  // The Dirichlet diffusion and the mean exist only with a Dirichlet solver (diffused()).
-  const int dirichletRows = dirichletSolver_ ? n : 0;
+  // The Dirichlet diffusion and the mean exist only when averaged (diffused()); a one-shot
+  // solve makes the distance step's vectors only after the heat solve.
+  const int dirichletRows = averaged_ ? n : 0, distanceRows = oneShot_ ? 0 : n;
   uDirichlet_ = Eigen::MatrixXd::Zero(dirichletRows, 1);
   heat_ = Eigen::MatrixXd::Zero(dirichletRows, 1);
-  divergence_ = Eigen::MatrixXd::Zero(n, 1);
-  y_ = Eigen::MatrixXd::Zero(n, 1);
-  distances_ = Eigen::VectorXd::Zero(n);
+  divergence_ = Eigen::MatrixXd::Zero(distanceRows, 1);
+  y_ = Eigen::MatrixXd::Zero(distanceRows, 1);
+  distances_ = Eigen::VectorXd::Zero(distanceRows);
 }
 
 void GeodesicSolver::Impl::setAlpha(double alpha) {
@@ -348,7 +362,7 @@ void GeodesicSolver::Impl::setSources(std::span<const GeodesicSource> sources) {
   sources_ = std::move(resolved);
   sourceWeights_ = std::move(weights);
   impulse_ = std::move(impulse);
-  if (dirichletSolver_) {
+  if (averaged_) {
     impulseDirichlet_ = impulse_;
     for (size_t u = 0; u < dirichlet_.size(); ++u)
       if (dirichlet_[u]) impulseDirichlet_(static_cast<Eigen::Index>(u), 0) = 0.0;
@@ -641,13 +655,23 @@ void GeodesicSolver::Impl::solve(const ProgressCallback& progress) {
 void GeodesicSolver::Impl::solveOnce(const ProgressCallback& progress) {
   requireSources();
   diffusionStep(true, progress);
-  computeDivergence();  // while diffused() is still the mean, if there is a Dirichlet solver
   diffusionSolver_ = SystemSolver(domain_->grid(), options_.solver);
   dirichletSolver_.reset();
-  impulse_ = impulseDirichlet_ = u_ = uDirichlet_ = heat_ = Eigen::MatrixXd();
-  const auto start = Clock::now();
-  setUpDistance(progress);
+  impulse_ = impulseDirichlet_ = Eigen::MatrixXd();
+  auto start = Clock::now();
+  makeGradients();
   timings_.setup += secondsSince(start);
+  const int n = domain_->unknowns();
+  divergence_ = Eigen::MatrixXd::Zero(n, 1);
+  computeDivergence();
+  u_ = uDirichlet_ = heat_ = Eigen::MatrixXd();
+  start = Clock::now();
+  const Eigen::SparseMatrix<double> ghost = gradients_->stabiliser(n);
+  gradients_->releaseSamples();  // the arena stays for distanceStep
+  setUpDistance(ghost, progress);
+  timings_.setup += secondsSince(start);
+  y_ = Eigen::MatrixXd::Zero(n, 1);
+  distances_ = Eigen::VectorXd::Zero(n);
   distanceStep(true, progress);
 }
 
