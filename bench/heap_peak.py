@@ -21,6 +21,7 @@ RESERVE_BYTES = 5 * 10**9  # an allocation this large is the start-up reserve
 STAGES = [
     ("write", "writeTextureOutput"),
     ("write", "writePagedImage"),
+    ("write", "writePagedTexture"),
     ("write", "dilateGutters"),
     ("result image", "InteractiveFilter::image"),
     ("result image", "filteredImage"),
@@ -38,6 +39,10 @@ STAGES = [
     ("geodesic divergence", "GeodesicGradients::divergence"),
     ("geodesic sources", "GeodesicSolver::Impl::setSources"),
     ("geodesic (other)", "geodesicDistance"),
+    ("lic M_h, S_h", "assembledFor"),
+    ("lic set-up (other)", "LineIntegralConvolution::LineIntegralConvolution"),
+    ("lic solve (other)", "LineIntegralConvolution::convolve"),
+    ("lic result image", "lineIntegralConvolution"),
     ("filter state", "filterOnce"),  # x, the right-hand side, the system matrix (one-shot)
     ("solve (other)", "filterTexture"),
     ("operators", "TexelDomain::TexelDomain"),
