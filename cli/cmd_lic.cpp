@@ -64,7 +64,8 @@ void runLic(LicArgs args) {
   TexelDomain domain(std::move(paged.mesh), paged.layout.width, paged.layout.height, {}, progress);
   timer.lap("operators");
   const auto fieldTexel = fieldInTexelCoordinates(domain.mesh(), domain.grid(), field);
-  const LicResult result = lineIntegralConvolution(domain, fieldTexel, args.options, progress);
+  const LicResult result = lineIntegralConvolution(domain, domain.releaseOperators(), fieldTexel,
+                                                   args.options, progress);
   timer.lap("solve");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
   const PixelFormat stored = runStage(progress, "write", [&] {

@@ -73,11 +73,10 @@ double metricArea(const TexturedMesh& mesh, const TexelGrid& grid, const Eigen::
 }
 
 /// Adds a tiny diagonal term to the rows of texels whose basis function barely touches the
-/// surface (diag of `mass` below kNegligibleMass times its mean): such rows are numerically
-/// singular (rounding-level Cholesky pivots) and their values would be noise. Other texels are
-/// not measurably affected.
-void pinNegligibleTexels(const SparseMatrixd& mass, double scale, SparseMatrixd& system) {
-  const Eigen::VectorXd diagonal = mass.diagonal();
+/// surface (`diagonal`, the mass matrix's, below kNegligibleMass times its mean): such rows are
+/// numerically singular (rounding-level Cholesky pivots) and their values would be noise. Other
+/// texels are not measurably affected.
+void pinNegligibleTexels(const Eigen::VectorXd& diagonal, double scale, SparseMatrixd& system) {
   const double floor = kNegligibleMass * diagonal.mean();
   for (Eigen::Index t = 0; t < diagonal.size(); ++t)
     if (diagonal(t) < floor) system.coeffRef(t, t) += scale * floor;
@@ -212,13 +211,13 @@ LineIntegralConvolution::LineIntegralConvolution(const TexelDomain& domain,
   MassStiffness h = ops.assembledFor(s.metric);
   s.massH.swap(h.mass);  // Eigen 3.4 sparse matrices copy on assignment
   SparseMatrixd system = options.alpha * s.massH + h.stiffness;
-  pinNegligibleTexels(s.massH, options.alpha, system);
+  pinNegligibleTexels(s.massH.diagonal(), options.alpha, system);
 
   const auto solverStart = std::chrono::steady_clock::now();
   s.diffusion.initAndUpdate(std::move(system));
   if (s.sharpens()) {
     SparseMatrixd sharpenSystem = options.sharpenAlpha * s.mass + s.stiffness;
-    pinNegligibleTexels(s.mass, options.sharpenAlpha, sharpenSystem);
+    pinNegligibleTexels(s.mass.diagonal(), options.sharpenAlpha, sharpenSystem);
     s.sharpening.emplace(domain.grid(), options.solver);
     s.sharpening->initAndUpdate(std::move(sharpenSystem));
   }
@@ -277,28 +276,108 @@ Eigen::MatrixXd licContrast(const Eigen::MatrixXd& values, const Eigen::VectorXd
   return out.cwiseMax(0.0).cwiseMin(1.0);
 }
 
+namespace {
+
+/// Faces with positive UV area on which the field vanishes.
+int zeroFieldFaces(const TexelDomain& domain, const std::vector<Eigen::Vector2d>& fieldTexel) {
+  int count = 0;
+  for (size_t f = 0; f < fieldTexel.size(); ++f)
+    if (fem::gridArea(domain.mesh(), domain.grid(), static_cast<int>(f)) != 0.0 &&
+        fieldTexel[f].isZero(0.0))
+      ++count;
+  return count;
+}
+
+/// The one-shot LIC on `ops`; `owned`, if given, holds `ops` and is consumed on the way. The same
+/// operations as LineIntegralConvolution's set-up and convolve (so the same bits), in an order
+/// that holds one system and one solver at a time: the diffusion's are freed before the
+/// sharpening's are formed, A_h is formed in M_h's storage, and with `owned` the piece integrals
+/// go once M_h and S_h exist and A_s is formed in M's storage.
+LicResult licOnce(const TexelDomain& domain, const TexelOperators& ops,
+                  std::unique_ptr<TexelOperators> owned,
+                  const std::vector<Eigen::Vector2d>& fieldTexel, const LicOptions& options,
+                  const ProgressCallback& progress) {
+  options.validate();
+  reportProgress(progress, "lic setup", 0.0);
+  const auto start = std::chrono::steady_clock::now();
+  const TexelGrid& grid = domain.grid();
+  LicResult result;
+  LicReport& report = result.report;
+  const std::vector<Eigen::Matrix2d> metric =
+      anisotropicMetric(domain.mesh(), grid, ops.metric(), fieldTexel, options.epsilon);
+  report.zeroFieldFaces = zeroFieldFaces(domain, fieldTexel);
+  Eigen::MatrixXd x, b;
+  SparseMatrixd diffusionSystem;
+  {
+    Eigen::MatrixXd noise = licNoise(grid, options.channels, options.seed);
+    MassStiffness h = ops.assembledFor(metric);
+    if (owned) owned->releasePieceIntegrals();
+    b = options.alpha * (h.mass * noise);
+    // Start from the noise's mean (S_h kills constants): residual below that of x = 0 or noise.
+    x = noise.colwise().mean().replicate(noise.rows(), 1);
+    const Eigen::VectorXd massDiagonal = h.mass.diagonal();
+    diffusionSystem = screenedSystem(std::move(h), options.alpha);
+    pinNegligibleTexels(massDiagonal, options.alpha, diffusionSystem);
+  }
+  {
+    const auto solverStart = std::chrono::steady_clock::now();
+    SystemSolver diffusion(grid, options.solver);
+    diffusion.initAndUpdate(std::move(diffusionSystem));
+    report.solverSetupSeconds = secondsSince(solverStart);
+    report.setupSeconds = secondsSince(start);
+    reportProgress(progress, "lic setup", 1.0);
+    report.diffusion = diffusion.solve(b, x, renameStage(progress, "lic solve"));
+  }
+  b = Eigen::MatrixXd();
+  const Eigen::VectorXd area = ops.mass() * Eigen::VectorXd::Ones(domain.unknowns());
+  if (options.sharpenBeta == 1.0) {
+    owned.reset();  // `ops` is not used again
+  } else {
+    const auto sharpenStart = std::chrono::steady_clock::now();
+    const Eigen::MatrixXd rhs =
+        options.sharpenAlpha * (ops.mass() * x) + options.sharpenBeta * (ops.stiffness() * x);
+    const Eigen::VectorXd massDiagonal = ops.mass().diagonal();
+    // alpha_s M + S (no seam term: the immersion metric's own screened system).
+    const double sharpenAlpha = options.sharpenAlpha;
+    const EntryCombination screen = [sharpenAlpha](Eigen::Index, Eigen::Index, double m, double s) {
+      return sharpenAlpha * m + s;
+    };
+    SparseMatrixd system =
+        owned ? TexelOperators::combined(std::move(owned), screen) : ops.combined(screen);
+    pinNegligibleTexels(massDiagonal, options.sharpenAlpha, system);
+    SystemSolver sharpening(grid, options.solver);
+    sharpening.initAndUpdate(std::move(system));
+    const double sharpenSetup = secondsSince(sharpenStart);
+    report.solverSetupSeconds += sharpenSetup;
+    report.setupSeconds += sharpenSetup;
+    Eigen::MatrixXd y = x;
+    report.sharpening = sharpening.solve(rhs, y, renameStage(progress, "lic sharpen"));
+    x = std::move(y);
+  }
+  result.values = std::move(x);
+  result.image = Image(grid.imageWidth, grid.imageHeight, options.channels, PixelFormat::UInt8);
+  scatterTexels(grid, licContrast(result.values, area, options.contrast), result.image);
+  return result;
+}
+
+}  // namespace
+
 LicResult lineIntegralConvolution(const TexelDomain& domain,
                                   const std::vector<Eigen::Vector2d>& fieldTexel,
                                   const LicOptions& options, const ProgressCallback& progress) {
-  reportProgress(progress, "lic setup", 0.0);
-  LineIntegralConvolution lic(domain, fieldTexel, options);
-  reportProgress(progress, "lic setup", 1.0);
-  // convolve's stages "solve" and "sharpen solve" under this function's names.
-  ProgressCallback solves;
-  if (progress)
-    solves = [&progress](const Progress& p) {
-      Progress named = p;
-      named.stage = p.stage == "solve" ? "lic solve" : "lic sharpen";
-      return progress(named);
-    };
-  LicResult result;
-  result.values =
-      lic.convolve(licNoise(domain.grid(), options.channels, options.seed), &result.report, solves);
-  const TexelGrid& grid = domain.grid();
-  result.image = Image(grid.imageWidth, grid.imageHeight, options.channels, PixelFormat::UInt8);
-  const Eigen::VectorXd area = domain.operators().mass() * Eigen::VectorXd::Ones(domain.unknowns());
-  scatterTexels(grid, licContrast(result.values, area, options.contrast), result.image);
-  return result;
+  return licOnce(domain, domain.operators(), nullptr, fieldTexel, options, progress);
+}
+
+LicResult lineIntegralConvolution(const TexelDomain& domain,
+                                  std::unique_ptr<TexelOperators> operators,
+                                  const std::vector<Eigen::Vector2d>& fieldTexel,
+                                  const LicOptions& options, const ProgressCallback& progress) {
+  if (!operators || operators->mass().rows() != domain.unknowns())
+    throw InvalidInputError(
+        "lineIntegralConvolution: the operators handed over are not the domain's "
+        "(TexelDomain::releaseOperators)");
+  const TexelOperators& ops = *operators;
+  return licOnce(domain, ops, std::move(operators), fieldTexel, options, progress);
 }
 
 }  // namespace texgrad

@@ -370,6 +370,10 @@ void TexelOperators::Impl::releasePieces() {
   piecesReleased = true;
 }
 
+void TexelOperators::releasePieceIntegrals() {
+  impl_->releasePieces();
+}
+
 void TexelOperators::Impl::requirePieces(const char* caller) const {
   if (piecesReleased)
     throw InvalidInputError(std::string(caller) +
@@ -502,6 +506,23 @@ SparseMatrixd TexelOperators::screenedSystem(std::unique_ptr<TexelOperators> ope
   screenValues(alpha, operators->impl_->stiffnessValues.data(), system.valuePtr(),
                system.nonZeros());
   operators->addSeamScreening(alpha, system);
+  return system;
+}
+
+SparseMatrixd screenedSystem(MassStiffness&& matrices, double alpha) {
+  SparseMatrixd& m = matrices.mass;
+  const SparseMatrixd& s = matrices.stiffness;
+  const bool samePattern =
+      m.isCompressed() && s.isCompressed() && m.rows() == s.rows() && m.cols() == s.cols() &&
+      m.nonZeros() == s.nonZeros() &&
+      std::equal(m.outerIndexPtr(), m.outerIndexPtr() + m.outerSize() + 1, s.outerIndexPtr()) &&
+      std::equal(m.innerIndexPtr(), m.innerIndexPtr() + m.nonZeros(), s.innerIndexPtr());
+  if (!samePattern)
+    throw InvalidInputError("screenedSystem: M and S do not share one sparsity pattern");
+  SparseMatrixd system;
+  system.swap(m);  // M's arrays become A's (Eigen 3.4's move assignment copies)
+  screenValues(alpha, s.valuePtr(), system.valuePtr(), system.nonZeros());
+  SparseMatrixd().swap(matrices.stiffness);  // frees S's arrays now
   return system;
 }
 

@@ -229,6 +229,35 @@ TEST(Lic, LeavesTheSharedDomainUntouchedAndIsDeterministic) {
   EXPECT_NE(lineIntegralConvolution(domain, field, otherSeed).values, first.values);
 }
 
+TEST(Lic, OneShotRunsMatchTheStatefulConvolutionBitForBit) {
+  // The one-shot paths (the domain's operators kept, or handed over and consumed) reorder the
+  // work to hold one system at a time; the values must stay those of convolve, bit for bit.
+  LicOptions grey, colourUnsharpened;
+  colourUnsharpened.channels = 3;
+  colourUnsharpened.sharpenBeta = 1.0;
+  for (const LicOptions& options : {grey, colourUnsharpened}) {
+    const TexelDomain domain(procedural::cylinder(16, 8), 48, 48);
+    const auto field = fieldInTexelCoordinates(
+        domain.mesh(), domain.grid(), curvatureField(domain.mesh(), CurvatureDirection::Major));
+    LineIntegralConvolution lic(domain, field, options);
+    const Eigen::MatrixXd stateful =
+        lic.convolve(licNoise(domain.grid(), options.channels, options.seed));
+    const LicResult kept = lineIntegralConvolution(domain, field, options);
+    EXPECT_TRUE(kept.values == stateful) << options.channels << " channels";
+    TexelDomain handing(procedural::cylinder(16, 8), 48, 48);
+    const LicResult consumed =
+        lineIntegralConvolution(handing, handing.releaseOperators(), field, options);
+    EXPECT_FALSE(handing.hasOperators());
+    EXPECT_TRUE(consumed.values == stateful) << options.channels << " channels";
+    EXPECT_EQ(consumed.image.pixels, kept.image.pixels);
+    EXPECT_EQ(consumed.report.diffusion.iterations, kept.report.diffusion.iterations);
+  }
+  TexelDomain domain(procedural::cylinder(16, 8), 48, 48);
+  const std::vector<Eigen::Vector2d> field(domain.mesh().faceCount(), Eigen::Vector2d(1, 0));
+  EXPECT_THROW(static_cast<void>(lineIntegralConvolution(domain, nullptr, field, {})),
+               InvalidInputError);
+}
+
 TEST(Lic, SeamContinuousOnTheCubeSphere) {
   TexelDomain domain(procedural::cubeSphere(8), 192, 128);
   // A field along the z axis, projected onto each face (it vanishes at the poles).

@@ -211,6 +211,44 @@ TEST(TexelOperators, AssembledOnceKeepsMAndSButRefusesToReassemble) {
   EXPECT_NO_THROW(kept.ops->modulatedStiffness(beta));
 }
 
+TEST(TexelOperators, PieceIntegralsReleasedLaterKeepMAndSButRefuseToReassemble) {
+  const TexturedMesh mesh = test::twoChartSquare(5);
+  const Built b = build(mesh, 64);
+  const SparseMatrixd m = b.ops->mass(), s = b.ops->stiffness();
+  const int64_t before = b.ops->storageBytes();
+  b.ops->releasePieceIntegrals();
+  EXPECT_LT(b.ops->storageBytes(), before);
+  EXPECT_EQ((b.ops->mass() - m).norm(), 0.0);
+  EXPECT_EQ((SparseMatrixd(b.ops->stiffness()) - s).norm(), 0.0);
+  EXPECT_THROW(b.ops->assembledFor(b.ops->metric()), InvalidInputError);
+  EXPECT_THROW(b.ops->setMetric(b.ops->metric()), InvalidInputError);
+}
+
+TEST(TexelOperators, ScreenedSystemOfMassAndStiffnessIsFormedInTheMassStorage) {
+  const TexturedMesh mesh = test::twoChartSquare(3, 0.05);
+  const Built b = build(mesh, 64);
+  std::vector<Eigen::Matrix2d> metric = b.ops->metric();
+  for (size_t f = 0; f < metric.size(); ++f) metric[f](0, 0) *= 3.0;
+  const double alpha = 37.5;
+  MassStiffness h = b.ops->assembledFor(metric);
+  const SparseMatrixd expected = alpha * h.mass + h.stiffness;
+  const double* massValues = h.mass.valuePtr();
+  const SparseMatrixd system = screenedSystem(std::move(h), alpha);
+  // Entry for entry the expression's values, in M's own array; M and S are left empty.
+  ASSERT_EQ(system.nonZeros(), expected.nonZeros());
+  EXPECT_TRUE(
+      std::equal(system.valuePtr(), system.valuePtr() + system.nonZeros(), expected.valuePtr()));
+  EXPECT_TRUE(std::equal(system.innerIndexPtr(), system.innerIndexPtr() + system.nonZeros(),
+                         expected.innerIndexPtr()));
+  EXPECT_EQ(system.valuePtr(), massValues);
+  EXPECT_EQ(h.mass.nonZeros(), 0);
+  EXPECT_EQ(h.stiffness.nonZeros(), 0);
+  // Matrices on different patterns are refused.
+  MassStiffness mismatched = b.ops->assembledFor(metric);
+  mismatched.stiffness.prune([](Eigen::Index r, Eigen::Index c, double) { return r == c; });
+  EXPECT_THROW(static_cast<void>(screenedSystem(std::move(mismatched), alpha)), InvalidInputError);
+}
+
 TEST(TexelOperators, StiffnessSharesTheMassPatternAndMatchesItsOwnAssembly) {
   const Built b = build(test::cubeSphere(4), 48);
   const SparseMatrixd& m = b.ops->mass();

@@ -124,10 +124,21 @@ struct LicResult {
 Eigen::MatrixXd licContrast(const Eigen::MatrixXd& values, const Eigen::VectorXd& weights,
                             double contrast);
 
-/// One-shot LIC: noise from options.seed, diffusion, sharpening, contrast, image. Reports the
-/// stages "lic setup" (0 and 1), "lic solve" and, if sharpening, "lic sharpen" (with the
-/// iteration counts) to `progress`, which may cancel.
+/// One-shot LIC: noise from options.seed, diffusion, sharpening, contrast, image; the same
+/// values as LineIntegralConvolution::convolve, bit for bit, with one system and one solver
+/// alive at a time. Reports the stages "lic setup" (0, and 1 once the diffusion's solver is set
+/// up), "lic solve" and, if sharpening, "lic sharpen" (with the iteration counts) to `progress`,
+/// which may cancel.
 LicResult lineIntegralConvolution(const TexelDomain& domain,
+                                  const std::vector<Eigen::Vector2d>& fieldTexel,
+                                  const LicOptions& options, const ProgressCallback& progress = {});
+
+/// As above, for a caller done with the operators: `operators` (the domain's, handed over by
+/// TexelDomain::releaseOperators) lose their piece integrals once M_h and S_h are assembled, and
+/// M and S are consumed by the sharpening's system alpha_s M + S, so no second copy of their
+/// pattern is held (docs/memory.md). Same result, bit for bit.
+LicResult lineIntegralConvolution(const TexelDomain& domain,
+                                  std::unique_ptr<TexelOperators> operators,
                                   const std::vector<Eigen::Vector2d>& fieldTexel,
                                   const LicOptions& options, const ProgressCallback& progress = {});
 

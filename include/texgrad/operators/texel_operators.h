@@ -97,6 +97,10 @@ class TexelOperators {
   void setMetric(std::vector<Eigen::Matrix2d> metric);
   /// Current per-face metric.
   const std::vector<Eigen::Matrix2d>& metric() const;
+  /// Frees the per-piece integrals now (as OperatorOptions::keepPieceIntegrals = false does
+  /// after the first assembly), for an owner done re-assembling; M and S stay. setMetric,
+  /// assembledFor and modulatedStiffness then throw InvalidInputError.
+  void releasePieceIntegrals();
   /// M and S for another per-face metric (as setMetric takes it), on the same pattern, leaving
   /// this object's metric and matrices as they are (so operators shared by several apps stay
   /// unchanged). Throws InvalidInputError as setMetric does.
@@ -161,6 +165,12 @@ class TexelOperators {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// alpha M + S formed in `matrices.mass`'s own storage, consuming both (left empty): a caller
+/// done with M and S never holds a second copy of their pattern. M and S must share one pattern,
+/// as TexelOperators::assembledFor returns them (throws InvalidInputError otherwise). Entry for
+/// entry the same values as the expression alpha * M + S.
+SparseMatrixd screenedSystem(MassStiffness&& matrices, double alpha);
 
 /// Builds M and S of a mesh/atlas/grid for the immersion metric of the unit-area surface.
 MassStiffness buildMassStiffness(const TexturedMesh& mesh, const Atlas& atlas,
