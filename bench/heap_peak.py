@@ -42,7 +42,8 @@ STAGES = [
     ("lic M_h, S_h", "assembledFor"),
     ("lic set-up (other)", "LineIntegralConvolution::LineIntegralConvolution"),
     ("lic solve (other)", "LineIntegralConvolution::convolve"),
-    ("lic result image", "lineIntegralConvolution"),
+    ("lic (other)", "licOnce"),  # the one-shot path: noise, b, x, systems, rhs, image
+    ("lic (other)", "lineIntegralConvolution"),
     ("filter state", "filterOnce"),  # x, the right-hand side, the system matrix (one-shot)
     ("solve (other)", "filterTexture"),
     ("operators", "TexelDomain::TexelDomain"),

@@ -288,63 +288,97 @@ int zeroFieldFaces(const TexelDomain& domain, const std::vector<Eigen::Vector2d>
   return count;
 }
 
-/// The one-shot LIC on `ops`; `owned`, if given, holds `ops` and is consumed on the way. The same
-/// operations as LineIntegralConvolution's set-up and convolve (so the same bits), in an order
-/// that holds one system and one solver at a time: the diffusion's are freed before the
-/// sharpening's are formed, A_h is formed in M_h's storage, and with `owned` the piece integrals
-/// go once M_h and S_h exist and A_s is formed in M's storage.
-LicResult licOnce(const TexelDomain& domain, const TexelOperators& ops,
-                  std::unique_ptr<TexelOperators> owned,
+/// alpha M + S entry by entry on M's pattern, with no seam term: LIC's two systems are the plain
+/// screened systems of their metrics.
+EntryCombination screening(double alpha) {
+  return [alpha](Eigen::Index, Eigen::Index, double m, double s) { return alpha * m + s; };
+}
+
+/// The system alpha M + S of `ops`'s matrices, pinned (pinNegligibleTexels); `owned`, if given,
+/// holds `ops` and is consumed (A formed in M's storage).
+SparseMatrixd pinnedScreenedSystem(const TexelOperators& ops, std::unique_ptr<TexelOperators> owned,
+                                   double alpha) {
+  const Eigen::VectorXd massDiagonal = ops.mass().diagonal();
+  SparseMatrixd system = owned ? TexelOperators::combined(std::move(owned), screening(alpha))
+                               : ops.combined(screening(alpha));
+  pinNegligibleTexels(massDiagonal, alpha, system);
+  return system;
+}
+
+/// The diffusion's right-hand side alpha M_h noise, and its system alpha M_h + S_h (pinned) in
+/// `system`. Shared operators get M_h and S_h assembled next to theirs; handed-over ones
+/// (`owned`, holding `ops`) are re-assembled for h in their own storage and consumed, so no
+/// matrix of the immersion metric is held through the diffusion.
+Eigen::MatrixXd diffusionSystem(const TexelOperators& ops, std::unique_ptr<TexelOperators> owned,
+                                const std::vector<Eigen::Matrix2d>& metric,
+                                const Eigen::MatrixXd& noise, double alpha, SparseMatrixd& system) {
+  if (owned) {
+    owned->setMetric(metric);
+    owned->releasePieceIntegrals();
+    Eigen::MatrixXd b = alpha * (owned->mass() * noise);
+    const TexelOperators& h = *owned;
+    system = pinnedScreenedSystem(h, std::move(owned), alpha);
+    return b;
+  }
+  MassStiffness h = ops.assembledFor(metric);
+  Eigen::MatrixXd b = alpha * (h.mass * noise);
+  const Eigen::VectorXd massDiagonal = h.mass.diagonal();
+  system = screenedSystem(std::move(h), alpha);
+  pinNegligibleTexels(massDiagonal, alpha, system);
+  return b;
+}
+
+/// The one-shot LIC on the domain's operators, or on `owned` (handed over by the domain) if
+/// given. The same operations as LineIntegralConvolution's set-up and convolve (so the same
+/// bits), in an order that holds one system and one solver at a time: the diffusion's are freed
+/// before the sharpening's are formed, and each system is formed in its mass matrix's storage.
+/// Handed-over operators become the diffusion's system; the sharpening then rebuilds the
+/// immersion metric's operators (deterministic: the same M and S, bit for bit) and consumes them.
+LicResult licOnce(const TexelDomain& domain, std::unique_ptr<TexelOperators> owned,
                   const std::vector<Eigen::Vector2d>& fieldTexel, const LicOptions& options,
                   const ProgressCallback& progress) {
   options.validate();
   reportProgress(progress, "lic setup", 0.0);
   const auto start = std::chrono::steady_clock::now();
   const TexelGrid& grid = domain.grid();
+  const TexelOperators& ops = owned ? *owned : domain.operators();
+  OperatorOptions rebuild = ops.options();
+  rebuild.keepPieceIntegrals = false;
+  const bool handedOver = owned != nullptr;
   LicResult result;
   LicReport& report = result.report;
   const std::vector<Eigen::Matrix2d> metric =
       anisotropicMetric(domain.mesh(), grid, ops.metric(), fieldTexel, options.epsilon);
   report.zeroFieldFaces = zeroFieldFaces(domain, fieldTexel);
-  Eigen::MatrixXd x, b;
-  SparseMatrixd diffusionSystem;
+  // Contrast weights: the surface area of each texel's basis function under the immersion metric.
+  const Eigen::VectorXd area = ops.mass() * Eigen::VectorXd::Ones(domain.unknowns());
+  Eigen::MatrixXd x;
   {
-    Eigen::MatrixXd noise = licNoise(grid, options.channels, options.seed);
-    MassStiffness h = ops.assembledFor(metric);
-    if (owned) owned->releasePieceIntegrals();
-    b = options.alpha * (h.mass * noise);
-    // Start from the noise's mean (S_h kills constants): residual below that of x = 0 or noise.
-    x = noise.colwise().mean().replicate(noise.rows(), 1);
-    const Eigen::VectorXd massDiagonal = h.mass.diagonal();
-    diffusionSystem = screenedSystem(std::move(h), options.alpha);
-    pinNegligibleTexels(massDiagonal, options.alpha, diffusionSystem);
-  }
-  {
+    SparseMatrixd system;
+    Eigen::MatrixXd b;
+    {
+      const Eigen::MatrixXd noise = licNoise(grid, options.channels, options.seed);
+      b = diffusionSystem(ops, std::move(owned), metric, noise, options.alpha, system);
+      // Start from the noise's mean (S_h kills constants): residual below that of 0 or noise.
+      x = noise.colwise().mean().replicate(noise.rows(), 1);
+    }
     const auto solverStart = std::chrono::steady_clock::now();
     SystemSolver diffusion(grid, options.solver);
-    diffusion.initAndUpdate(std::move(diffusionSystem));
+    diffusion.initAndUpdate(std::move(system));
     report.solverSetupSeconds = secondsSince(solverStart);
     report.setupSeconds = secondsSince(start);
     reportProgress(progress, "lic setup", 1.0);
     report.diffusion = diffusion.solve(b, x, renameStage(progress, "lic solve"));
   }
-  b = Eigen::MatrixXd();
-  const Eigen::VectorXd area = ops.mass() * Eigen::VectorXd::Ones(domain.unknowns());
-  if (options.sharpenBeta == 1.0) {
-    owned.reset();  // `ops` is not used again
-  } else {
+  if (options.sharpenBeta != 1.0) {
     const auto sharpenStart = std::chrono::steady_clock::now();
+    std::unique_ptr<TexelOperators> immersion;
+    if (handedOver)
+      immersion = std::make_unique<TexelOperators>(domain.mesh(), domain.atlas(), grid, rebuild);
+    const TexelOperators& m = immersion ? *immersion : domain.operators();
     const Eigen::MatrixXd rhs =
-        options.sharpenAlpha * (ops.mass() * x) + options.sharpenBeta * (ops.stiffness() * x);
-    const Eigen::VectorXd massDiagonal = ops.mass().diagonal();
-    // alpha_s M + S (no seam term: the immersion metric's own screened system).
-    const double sharpenAlpha = options.sharpenAlpha;
-    const EntryCombination screen = [sharpenAlpha](Eigen::Index, Eigen::Index, double m, double s) {
-      return sharpenAlpha * m + s;
-    };
-    SparseMatrixd system =
-        owned ? TexelOperators::combined(std::move(owned), screen) : ops.combined(screen);
-    pinNegligibleTexels(massDiagonal, options.sharpenAlpha, system);
+        options.sharpenAlpha * (m.mass() * x) + options.sharpenBeta * (m.stiffness() * x);
+    SparseMatrixd system = pinnedScreenedSystem(m, std::move(immersion), options.sharpenAlpha);
     SystemSolver sharpening(grid, options.solver);
     sharpening.initAndUpdate(std::move(system));
     const double sharpenSetup = secondsSince(sharpenStart);
@@ -365,7 +399,7 @@ LicResult licOnce(const TexelDomain& domain, const TexelOperators& ops,
 LicResult lineIntegralConvolution(const TexelDomain& domain,
                                   const std::vector<Eigen::Vector2d>& fieldTexel,
                                   const LicOptions& options, const ProgressCallback& progress) {
-  return licOnce(domain, domain.operators(), nullptr, fieldTexel, options, progress);
+  return licOnce(domain, nullptr, fieldTexel, options, progress);
 }
 
 LicResult lineIntegralConvolution(const TexelDomain& domain,
@@ -376,8 +410,7 @@ LicResult lineIntegralConvolution(const TexelDomain& domain,
     throw InvalidInputError(
         "lineIntegralConvolution: the operators handed over are not the domain's "
         "(TexelDomain::releaseOperators)");
-  const TexelOperators& ops = *operators;
-  return licOnce(domain, ops, std::move(operators), fieldTexel, options, progress);
+  return licOnce(domain, std::move(operators), fieldTexel, options, progress);
 }
 
 }  // namespace texgrad

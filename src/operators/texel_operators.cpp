@@ -431,6 +431,7 @@ SparseViewd TexelOperators::stiffness() const {
 const SparseMatrixd& TexelOperators::seamContinuity() const {
   return impl_->continuityMatrix();
 }
+const OperatorOptions& TexelOperators::options() const { return impl_->options; }
 const fem::TexelBasis& TexelOperators::basis() const { return impl_->basis; }
 const OperatorReport& TexelOperators::report() const { return impl_->report; }
 

@@ -134,9 +134,10 @@ LicResult lineIntegralConvolution(const TexelDomain& domain,
                                   const LicOptions& options, const ProgressCallback& progress = {});
 
 /// As above, for a caller done with the operators: `operators` (the domain's, handed over by
-/// TexelDomain::releaseOperators) lose their piece integrals once M_h and S_h are assembled, and
-/// M and S are consumed by the sharpening's system alpha_s M + S, so no second copy of their
-/// pattern is held (docs/memory.md). Same result, bit for bit.
+/// TexelDomain::releaseOperators) are re-assembled for h in their own storage and consumed by
+/// the diffusion's system, so no matrix of the immersion metric is held through the diffusion;
+/// the sharpening rebuilds the immersion metric's operators (bit for bit the same; one more
+/// operator build) and consumes them likewise (docs/memory.md). Same result, bit for bit.
 LicResult lineIntegralConvolution(const TexelDomain& domain,
                                   std::unique_ptr<TexelOperators> operators,
                                   const std::vector<Eigen::Vector2d>& fieldTexel,

@@ -150,6 +150,8 @@ class TexelOperators {
   /// div_h(omega) (|T|): int sqrt|g| g^-1(dphi_t, omega) (paper Sec. 5.3; no minus sign).
   Eigen::VectorXd divergenceOf(const SurfaceOneForm& omega, int degree = 4) const;
 
+  /// The options these operators were built with.
+  const OperatorOptions& options() const;
   /// The function space.
   const fem::TexelBasis& basis() const;
   /// Assembly diagnostics.
