@@ -22,7 +22,9 @@ STAGES = [
     ("write", "writeTextureOutput"),
     ("result image", "InteractiveFilter::image"),
     ("result image", "filteredImage"),
+    ("result image", "reactionImage"),
     ("cycles", "SystemSolver::solve"),
+    ("react steps", "ReactionDiffusion::step"),  # targets and M targets, outside the cycles
     ("stitch solver set-up", "solveStitch"),
     ("stitch (partials)", "stitchPartials"),
     ("stitch (composite)", "stitchComposite"),
@@ -30,6 +32,7 @@ STAGES = [
     ("surface points", "PhotoProjector::PhotoProjector"),
     ("solver set-up", "InteractiveFilter::InteractiveFilter"),
     ("solver set-up", "SystemSolver::initAndUpdate"),
+    ("react state", "ReactionDiffusion::ReactionDiffusion"),  # systems, seeded state
     ("filter state", "filterOnce"),  # x, the right-hand side, the system matrix (one-shot)
     ("solve (other)", "filterTexture"),
     ("operators", "TexelDomain::TexelDomain"),
