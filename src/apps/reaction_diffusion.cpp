@@ -304,18 +304,21 @@ void ReactionDiffusion::step() {
   Impl& s = *impl_;
   const SparseMatrixd& mass = s.mass();
   const double dt = s.options.timeStep, feed = s.options.feed, kill = s.options.kill;
-  const Eigen::ArrayXd cu = s.u.array().cwiseMax(0.0).cwiseMin(1.0);
-  const Eigen::ArrayXd cv = s.v.array().cwiseMax(0.0).cwiseMin(1.0);
-  const Eigen::ArrayXd uvv = cu * cv * cv;
-  const Eigen::VectorXd targetU = (s.u.array() + dt * (feed * (1.0 - cu) - uvv)).matrix();
-  const Eigen::VectorXd targetV = (s.v.array() + dt * (uvv - (feed + kill) * cv)).matrix();
-  // The explicit targets are the initial guesses: their residual is the diffusion increment only.
-  Eigen::MatrixXd x = targetU;
-  s.reports[0] = s.solverU.solve(mass * targetU, x);
-  s.u = x.col(0);
-  x = targetV;
-  s.reports[1] = s.solverV.solve(mass * targetV, x);
-  s.v = x.col(0);
+  // The explicit targets c + dt R(u, v) are the initial guesses (their residual is the
+  // diffusion increment only), formed in one pass straight into the solves' storage.
+  const Eigen::Index n = s.u.size();
+  Eigen::MatrixXd xU(n, 1), xV(n, 1);
+  for (Eigen::Index t = 0; t < n; ++t) {
+    const double cu = std::clamp(s.u(t), 0.0, 1.0), cv = std::clamp(s.v(t), 0.0, 1.0);
+    const double uvv = cu * cv * cv;
+    xU(t) = s.u(t) + dt * (feed * (1.0 - cu) - uvv);
+    xV(t) = s.v(t) + dt * (uvv - (feed + kill) * cv);
+  }
+  s.reports[0] = s.solverU.solve(mass * xU.col(0), xU);
+  s.u = xU.col(0);
+  xU.resize(0, 1);
+  s.reports[1] = s.solverV.solve(mass * xV.col(0), xV);
+  s.v = xV.col(0);
   ++s.steps;
 }
 
