@@ -147,14 +147,18 @@ Image stateImage(const TexelGrid& grid, const SparseMatrixd& mass, const Eigen::
     throw InvalidInputError("reactionImage: " + std::to_string(u.size()) + " values for " +
                             std::to_string(grid.unknownCount()) + " unknowns");
   if (u.size() == 0) return image;
-  const Eigen::VectorXd clamped = u.cwiseMax(0.0).cwiseMin(1.0);
-  const Eigen::VectorXd weight = mass * Eigen::VectorXd::Ones(u.size());
-  const double low = weightedQuantile(clamped, weight, kDisplayQuantile);
-  const double high = weightedQuantile(clamped, weight, 1.0 - kDisplayQuantile);
-  const Eigen::VectorXd shown =
-      high > low
-          ? Eigen::VectorXd(((high - clamped.array()) / (high - low)).cwiseMax(0.0).cwiseMin(1.0))
-          : Eigen::VectorXd::Zero(u.size());
+  // The clamped values become the shown ones in place, once the weights are freed.
+  Eigen::VectorXd shown = u.cwiseMax(0.0).cwiseMin(1.0);
+  double low = 0.0, high = 0.0;
+  {
+    const Eigen::VectorXd weight = mass * Eigen::VectorXd::Ones(u.size());
+    low = weightedQuantile(shown, weight, kDisplayQuantile);
+    high = weightedQuantile(shown, weight, 1.0 - kDisplayQuantile);
+  }
+  if (high > low)
+    shown = ((high - shown.array()) / (high - low)).cwiseMax(0.0).cwiseMin(1.0);
+  else
+    shown.setZero();
   scatterTexels(grid, shown, image);
   return image;
 }
@@ -165,9 +169,10 @@ ReactionResult runToResult(ReactionDiffusion& model, int steps, const ProgressCa
   model.run(steps, progress);
   ReactionResult result;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // The image first: its temporaries and the copies of u and v are not alive together.
+  result.image = model.image();
   result.u = model.u();
   result.v = model.v();
-  result.image = model.image();
   return result;
 }
 
