@@ -23,6 +23,7 @@ STAGES = [
     ("result image", "InteractiveFilter::image"),
     ("result image", "filteredImage"),
     ("result image", "reactionImage"),
+    ("result image", "ReactionDiffusion::image"),
     ("cycles", "SystemSolver::solve"),
     ("react steps", "ReactionDiffusion::step"),  # targets and M targets, outside the cycles
     ("stitch solver set-up", "solveStitch"),
