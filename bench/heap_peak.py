@@ -20,6 +20,8 @@ RESERVE_BYTES = 5 * 10**9  # an allocation this large is the start-up reserve
 # (stage, frame substring), most specific first: the first match in this order names the stage.
 STAGES = [
     ("write", "writeTextureOutput"),
+    ("write", "writePagedImage"),
+    ("write", "dilateGutters"),
     ("result image", "InteractiveFilter::image"),
     ("result image", "filteredImage"),
     ("result image", "reactionImage"),
@@ -34,6 +36,12 @@ STAGES = [
     ("solver set-up", "InteractiveFilter::InteractiveFilter"),
     ("solver set-up", "SystemSolver::initAndUpdate"),
     ("react state", "ReactionDiffusion::ReactionDiffusion"),  # systems, seeded state
+    ("solver set-up", "SystemSolver::update"),
+    ("geodesic gradients", "GeodesicGradients::GeodesicGradients"),
+    ("geodesic stabiliser", "GeodesicGradients::stabiliser"),
+    ("geodesic divergence", "GeodesicGradients::divergence"),
+    ("geodesic sources", "GeodesicSolver::Impl::setSources"),
+    ("geodesic (other)", "geodesicDistance"),
     ("filter state", "filterOnce"),  # x, the right-hand side, the system matrix (one-shot)
     ("solve (other)", "filterTexture"),
     ("operators", "TexelDomain::TexelDomain"),

@@ -15,6 +15,8 @@
 #include <cstddef>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "apps/closest_point.h"
 #include "apps/geodesic_gradients.h"
@@ -60,6 +62,46 @@ std::pair<double, double> eigenvalues(const Eigen::Matrix2d& m) {
   return {mean - radius, mean + radius};
 }
 
+/// A1 = alpha M + S (paper Eq. 5), formed on M's pattern in one copy of it. (An Eigen sum of
+/// sparse matrices grows its result by doubling: up to twice the entries' storage, 166 MB of
+/// slack per system at spot 2048², docs/memory.md.)
+Eigen::SparseMatrix<double> heatSystem(const TexelOperators& ops, double alpha) {
+  return ops.combined([alpha](Eigen::Index, Eigen::Index, double mass, double stiffness) {
+    return alpha * mass + stiffness;
+  });
+}
+
+/// a += b where b's entries all lie in a's pattern (compressed a, sorted inner indices);
+/// otherwise a = a + b (the union of the patterns).
+void addInPattern(Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix<double>& b) {
+  const int* outer = a.outerIndexPtr();
+  const int* inner = a.innerIndexPtr();
+  std::vector<std::pair<Eigen::Index, double>> updates;  // (position in a, value of b)
+  for (int j = 0; j < b.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(b, j); it; ++it) {
+      const int* found =
+          std::lower_bound(inner + outer[j], inner + outer[j + 1], static_cast<int>(it.row()));
+      if (found == inner + outer[j + 1] || *found != it.row()) {
+        a = a + b;
+        return;
+      }
+      updates.emplace_back(found - inner, it.value());
+    }
+  for (const auto& [k, value] : updates) a.valuePtr()[k] += value;
+}
+
+/// A2 = S + eps M + G (see GeodesicSolver), formed as heatSystem is: S + eps M on M's
+/// pattern, then the ghost penalty G (entries on cut cells' texels, within that pattern).
+Eigen::SparseMatrix<double> distanceSystem(const TexelOperators& ops,
+                                           const Eigen::SparseMatrix<double>& ghost) {
+  Eigen::SparseMatrix<double> a =
+      ops.combined([](Eigen::Index, Eigen::Index, double mass, double stiffness) {
+        return stiffness + GeodesicSolver::kDistanceScreening * mass;
+      });
+  addInPattern(a, ghost);
+  return a;
+}
+
 }  // namespace
 
 GeodesicOffset parseGeodesicOffset(const std::string& text) {
@@ -102,13 +144,22 @@ GeodesicOptions GeodesicOptions::interactive() {
 
 /// The solver's state: both systems, the sources and the iterates (see GeodesicSolver).
 struct GeodesicSolver::Impl {
-  Impl(const TexelDomain& domain, const GeodesicOptions& options, const ProgressCallback& progress);
+  /// With `oneShot`, the gradient samples, the distance system and the distance step's vectors
+  /// are made only by solveOnce(), after the heat solve.
+  Impl(const TexelDomain& domain, const GeodesicOptions& options, const ProgressCallback& progress,
+       bool oneShot = false);
   void setAlpha(double alpha);
   void setSources(std::span<const GeodesicSource> sources);
   void update();
   double residual() const;
   void solve(const ProgressCallback& progress);
-  const Eigen::MatrixXd& diffused() const { return dirichletSolver_ ? heat_ : u_; }
+  /// solve() for a one-shot Impl, with one system's solver alive at a time: the heat solve, then
+  /// the heat solvers and the impulse are freed, the gradient samples built for the divergence
+  /// and the ghost penalty and freed with the heat before the distance system is set up (at spot
+  /// 2048² a solver holds ~250 MB of hierarchy besides its 244 MB copy of A, the samples 144
+  /// MB). The object can do nothing but report its results afterwards.
+  void solveOnce(const ProgressCallback& progress);
+  const Eigen::MatrixXd& diffused() const { return averaged_ ? heat_ : u_; }
 
   /// Interior texel near a source with its chord distance (unit-area units), for NearField.
   struct NearFieldTexel {
@@ -132,7 +183,14 @@ struct GeodesicSolver::Impl {
   void requireSources() const;
   void resetIterates();
   void diffusionStep(bool full, const ProgressCallback& progress = {});
+  /// The divergence of the normalised gradient of diffused(), if the heat changed since the last.
+  void computeDivergence();
+  /// Builds gradients_ (samples of the basis gradients, on the solver's threads).
+  void makeGradients();
   void distanceStep(bool full, const ProgressCallback& progress = {});
+  /// Sets up the distance solver on A2 with the ghost penalty `ghost` (see GeodesicSolver),
+  /// reporting "distance setup".
+  void setUpDistance(const Eigen::SparseMatrix<double>& ghost, const ProgressCallback& progress);
 
   const TexelDomain* domain_;
   GeodesicOptions options_;
@@ -140,6 +198,8 @@ struct GeodesicSolver::Impl {
   std::unique_ptr<GeodesicGradients> gradients_;
   SystemSolver diffusionSolver_, distanceSolver_;
   std::unique_ptr<SystemSolver> dirichletSolver_;  ///< only with Average on meshes with boundary
+  bool averaged_ = false;  ///< the heat is the mean of two diffusions (a Dirichlet solver is made)
+  bool oneShot_ = false;   ///< see the constructor
   std::vector<uint8_t> dirichlet_;  ///< per unknown: held at zero in the Dirichlet diffusion
   int dirichletCount_ = 0;
   std::vector<ResolvedSource> sources_;
@@ -161,7 +221,7 @@ struct GeodesicSolver::Impl {
 };
 
 GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& options,
-                           const ProgressCallback& progress)
+                           const ProgressCallback& progress, bool oneShot)
     : domain_(&domain),
       options_([&] {
         options.validate();
@@ -169,20 +229,19 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
       }()),
       diffusionSolver_(domain.grid(), options.solver, MatrixCopy::Kept),  // matrix() read below
       distanceSolver_(domain.grid(), options.solver) {
+  oneShot_ = oneShot;
   const auto start = Clock::now();
   const TexelOperators& ops = domain.operators();
   const double area = ops.report().metric.surfaceArea;
   if (!(area > 0.0)) throw InvalidInputError("the mesh has zero surface area; no distances exist");
   scale_ = std::sqrt(area);
-  gradients_ = std::make_unique<GeodesicGradients>(domain, options_.solver.multigrid.threads);
+  if (!oneShot) makeGradients();
   // A1 and A2 live in their solvers only (SystemSolver::matrix()).
-  diffusionSolver_.initAndUpdate(options_.alpha * ops.mass() + ops.stiffness(),
+  diffusionSolver_.initAndUpdate(heatSystem(ops, options_.alpha),
                                  renameStage(progress, "heat setup"));
   // The cut-cell ghost penalty keeps barely covered texels from amplifying the inconsistency
   // of the normalised gradient (see Gradients::stabiliser).
-  distanceSolver_.initAndUpdate(
-      ops.stiffness() + kDistanceScreening * ops.mass() + gradients_->stabiliser(domain.unknowns()),
-      renameStage(progress, "distance setup"));
+  if (!oneShot) setUpDistance(gradients_->stabiliser(domain.unknowns()), progress);
   labelComponents();
   if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
     buildDirichlet(progress);
@@ -201,6 +260,16 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
   impulse_ = Eigen::MatrixXd::Zero(n, 1);
   resetIterates();
   timings_.setup = secondsSince(start);
+}
+
+void GeodesicSolver::Impl::makeGradients() {
+  gradients_ = std::make_unique<GeodesicGradients>(*domain_, options_.solver.multigrid.threads);
+}
+
+void GeodesicSolver::Impl::setUpDistance(const Eigen::SparseMatrix<double>& ghost,
+                                         const ProgressCallback& progress) {
+  distanceSolver_.initAndUpdate(distanceSystem(domain_->operators(), ghost),
+                                renameStage(progress, "distance setup"));
 }
 
 void GeodesicSolver::Impl::buildDirichlet(const ProgressCallback& progress) {
@@ -227,6 +296,7 @@ void GeodesicSolver::Impl::buildDirichlet(const ProgressCallback& progress) {
   }
   dirichletCount_ = static_cast<int>(std::count(dirichlet_.begin(), dirichlet_.end(), 1));
   dirichletSolver_ = std::make_unique<SystemSolver>(grid, options_.solver);
+  averaged_ = true;
   dirichletSolver_->init(diffusionSolver_.matrix());
   updateDirichlet(renameStage(progress, "dirichlet heat setup"));
 }
@@ -248,11 +318,14 @@ void GeodesicSolver::Impl::resetIterates() {
   heatResidual_ = std::numeric_limits<double>::infinity();
   heatChanged_ = true;
   u_ = Eigen::MatrixXd::Zero(n, 1);
-  uDirichlet_ = Eigen::MatrixXd::Zero(n, 1);
-  heat_ = Eigen::MatrixXd::Zero(n, 1);
-  divergence_ = Eigen::MatrixXd::Zero(n, 1);
-  y_ = Eigen::MatrixXd::Zero(n, 1);
-  distances_ = Eigen::VectorXd::Zero(n);
+  // The Dirichlet diffusion and the mean exist only when averaged (diffused()); a one-shot
+  // solve makes the distance step's vectors only after the heat solve.
+  const int dirichletRows = averaged_ ? n : 0, distanceRows = oneShot_ ? 0 : n;
+  uDirichlet_ = Eigen::MatrixXd::Zero(dirichletRows, 1);
+  heat_ = Eigen::MatrixXd::Zero(dirichletRows, 1);
+  divergence_ = Eigen::MatrixXd::Zero(distanceRows, 1);
+  y_ = Eigen::MatrixXd::Zero(distanceRows, 1);
+  distances_ = Eigen::VectorXd::Zero(distanceRows);
 }
 
 void GeodesicSolver::Impl::setAlpha(double alpha) {
@@ -261,7 +334,7 @@ void GeodesicSolver::Impl::setAlpha(double alpha) {
   next.validate();
   options_ = next;
   const TexelOperators& ops = domain_->operators();
-  diffusionSolver_.update(options_.alpha * ops.mass() + ops.stiffness());
+  diffusionSolver_.update(heatSystem(ops, options_.alpha));
   if (dirichletSolver_) updateDirichlet();
   resetIterates();
 }
@@ -289,9 +362,11 @@ void GeodesicSolver::Impl::setSources(std::span<const GeodesicSource> sources) {
   sources_ = std::move(resolved);
   sourceWeights_ = std::move(weights);
   impulse_ = std::move(impulse);
-  impulseDirichlet_ = impulse_;
-  for (size_t u = 0; u < dirichlet_.size(); ++u)
-    if (dirichlet_[u]) impulseDirichlet_(static_cast<Eigen::Index>(u), 0) = 0.0;
+  if (averaged_) {
+    impulseDirichlet_ = impulse_;
+    for (size_t u = 0; u < dirichlet_.size(); ++u)
+      if (dirichlet_[u]) impulseDirichlet_(static_cast<Eigen::Index>(u), 0) = 0.0;
+  }
   collectNearField();
   findReachable();
   resetIterates();
@@ -503,6 +578,7 @@ void GeodesicSolver::Impl::requireSources() const {
 void GeodesicSolver::Impl::diffusionStep(bool full, const ProgressCallback& progress) {
   const auto start = Clock::now();
   timings_.diffusion = 0.0;
+  timings_.divergence = 0.0;
   if (!full && heatSettled_) return;  // u, and so the divergence, stay as they are
   diffusionReport_ = full
                          ? diffusionSolver_.solve(impulse_, u_, renameStage(progress, "heat solve"))
@@ -525,14 +601,17 @@ void GeodesicSolver::Impl::diffusionStep(bool full, const ProgressCallback& prog
   timings_.diffusion = secondsSince(start);
 }
 
-void GeodesicSolver::Impl::distanceStep(bool full, const ProgressCallback& progress) {
-  auto start = Clock::now();
-  if (heatChanged_) {
-    gradients_->divergence(diffused().data(), divergence_.data(), divergence_.rows());
-    heatChanged_ = false;
-  }
+void GeodesicSolver::Impl::computeDivergence() {
+  if (!heatChanged_) return;
+  const auto start = Clock::now();
+  gradients_->divergence(diffused().data(), divergence_.data(), divergence_.rows());
+  heatChanged_ = false;
   timings_.divergence = secondsSince(start);
-  start = Clock::now();
+}
+
+void GeodesicSolver::Impl::distanceStep(bool full, const ProgressCallback& progress) {
+  computeDivergence();
+  const auto start = Clock::now();
   distanceReport_ =
       full ? distanceSolver_.solve(divergence_, y_, renameStage(progress, "distance solve"))
            : distanceSolver_.refine(divergence_, y_, false);
@@ -570,6 +649,29 @@ double GeodesicSolver::Impl::residual() const {
 void GeodesicSolver::Impl::solve(const ProgressCallback& progress) {
   requireSources();
   diffusionStep(true, progress);
+  distanceStep(true, progress);
+}
+
+void GeodesicSolver::Impl::solveOnce(const ProgressCallback& progress) {
+  requireSources();
+  diffusionStep(true, progress);
+  diffusionSolver_ = SystemSolver(domain_->grid(), options_.solver);
+  dirichletSolver_.reset();
+  impulse_ = impulseDirichlet_ = Eigen::MatrixXd();
+  auto start = Clock::now();
+  makeGradients();
+  timings_.setup += secondsSince(start);
+  const int n = domain_->unknowns();
+  divergence_ = Eigen::MatrixXd::Zero(n, 1);
+  computeDivergence();
+  u_ = uDirichlet_ = heat_ = Eigen::MatrixXd();
+  start = Clock::now();
+  const Eigen::SparseMatrix<double> ghost = gradients_->stabiliser(n);
+  gradients_->releaseSamples();  // the arena stays for distanceStep
+  setUpDistance(ghost, progress);
+  timings_.setup += secondsSince(start);
+  y_ = Eigen::MatrixXd::Zero(n, 1);
+  distances_ = Eigen::VectorXd::Zero(n);
   distanceStep(true, progress);
 }
 
@@ -634,15 +736,15 @@ const GeodesicOptions& GeodesicSolver::options() const {
 
 GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,
                                 const GeodesicOptions& options, const ProgressCallback& progress) {
-  GeodesicSolver solver(domain, options, progress);
+  GeodesicSolver::Impl solver(domain, options, progress, true);
   solver.setSources(sources);
-  solver.solve(progress);
+  solver.solveOnce(progress);
   GeodesicResult result;
-  result.distances = solver.distances();
-  result.sources = solver.sources();
-  result.diffusionReport = solver.diffusionReport();
-  result.distanceReport = solver.distanceReport();
-  result.timings = solver.timings();
+  result.distances = std::move(solver.distances_);
+  result.sources = std::move(solver.sources_);
+  result.diffusionReport = std::move(solver.diffusionReport_);
+  result.distanceReport = std::move(solver.distanceReport_);
+  result.timings = solver.timings_;
   // Farthest texel among those whose centre lies on M (gutter texels extrapolate past the
   // boundary); any reachable texel if no centre does (charts narrower than a texel).
   const TexelGrid& grid = domain.grid();

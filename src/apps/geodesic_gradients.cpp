@@ -188,6 +188,21 @@ void GeodesicGradients::collectCutCells(const fem::TexelBasis& basis, const Texe
   }
 }
 
+void GeodesicGradients::releaseSamples() {
+  // Swapping with empty vectors returns the storage (clear() would keep the capacity).
+  std::vector<CellSample>().swap(cells);
+  std::vector<FaceMetric>().swap(faceMetrics);
+  std::vector<int64_t>().swap(rowBegin);
+  std::vector<SeamSample>().swap(seams);
+  std::vector<int32_t>().swap(seamTexels);
+  std::vector<Eigen::Vector2d>().swap(seamGradients);
+  std::vector<Eigen::Vector2d>().swap(seamDirections);
+  std::vector<int32_t>().swap(seamTargets);
+  std::vector<int32_t>().swap(seamTargetOfEntry);
+  std::vector<double>().swap(seamSums);
+  std::vector<CutCell>().swap(cutCells);
+}
+
 Eigen::SparseMatrix<double> GeodesicGradients::stabiliser(Eigen::Index n) const {
   constexpr std::array<double, 4> kTwist{1.0, -1.0, -1.0, 1.0};
   std::vector<Eigen::Triplet<double>> entries;

@@ -78,6 +78,9 @@ struct GeodesicGradients {
   /// each cut cell the stiffness the twist mode would have if the cell were covered, so a texel
   /// that its chart barely covers takes the value the plane through its cell extends to.
   Eigen::SparseMatrix<double> stabiliser(Eigen::Index n) const;
+  /// Frees every sample and cut cell (the arena stays): for a one-shot caller that has taken
+  /// the divergence and the stabiliser it needs.
+  void releaseSamples();
   /// Sets div (n values) to div_h(-du/|du|) of the function with coefficients u (one-point
   /// quadrature).
   void divergence(const double* u, double* div, Eigen::Index n);

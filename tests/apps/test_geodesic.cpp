@@ -279,6 +279,24 @@ TEST(Geodesic, OffsetsAndAlphaUpdates) {
   EXPECT_GT((solver.distances() - nearField.distances).cwiseAbs().maxCoeff(), 1e-6);
 }
 
+TEST(Geodesic, OneShotMatchesTheSolver) {
+  // geodesicDistance keeps one system's solver at a time (and forms A2 only after the heat
+  // solve); the distances must be the stateful solver's, bit for bit: with Dirichlet averaging
+  // (open square) and without (closed cube-sphere), with float cycles.
+  const GeodesicSource source = GeodesicSource::atPoint({0.3, 0.5, 0.8});
+  for (TexturedMesh mesh : {procedural::square(1.0, 0.25), procedural::cubeSphere(8)}) {
+    const TexelDomain domain(std::move(mesh), 128, 128);
+    GeodesicSolver solver(domain);
+    solver.setSource(source);
+    solver.solve();
+    const GeodesicResult once = geodesicDistance(domain, {&source, 1});
+    ASSERT_EQ(once.distances.size(), solver.distances().size());
+    EXPECT_TRUE((once.distances.array() == solver.distances().array()).all());
+    EXPECT_EQ(once.distanceReport.iterations, solver.distanceReport().iterations);
+    EXPECT_GT(once.timings.setup, 0.0);
+  }
+}
+
 TEST(Geodesic, ThreadCountDoesNotChangeTheResult) {
   // Divergence, transfers and relaxation add in a fixed order: 1 and 2 threads agree bit for bit.
   const TexelDomain domain(procedural::cubeSphere(8), 256, 256);
