@@ -25,7 +25,10 @@ STAGES = [
     ("write", "dilateGutters"),
     ("result image", "InteractiveFilter::image"),
     ("result image", "filteredImage"),
+    ("result image", "reactionImage"),
+    ("result image", "ReactionDiffusion::image"),
     ("cycles", "SystemSolver::solve"),
+    ("react steps", "ReactionDiffusion::step"),  # targets and M targets, outside the cycles
     ("stitch solver set-up", "solveStitch"),
     ("stitch (partials)", "stitchPartials"),
     ("stitch (composite)", "stitchComposite"),
@@ -33,6 +36,7 @@ STAGES = [
     ("surface points", "PhotoProjector::PhotoProjector"),
     ("solver set-up", "InteractiveFilter::InteractiveFilter"),
     ("solver set-up", "SystemSolver::initAndUpdate"),
+    ("react state", "ReactionDiffusion::ReactionDiffusion"),  # systems, seeded state
     ("solver set-up", "SystemSolver::update"),
     ("geodesic gradients", "GeodesicGradients::GeodesicGradients"),
     ("geodesic stabiliser", "GeodesicGradients::stabiliser"),

@@ -57,10 +57,12 @@ void runReact(ReactArgs args) {
   timer.lap("read");
   PagedTexture paged = placeOnPagesOfSize(std::move(mesh), width, height);
   checkPagedOutputArgs(args.out, paged.layout, args.bitDepth);
-  const TexelDomain domain(std::move(paged.mesh), paged.layout.width, paged.layout.height,
-                           OperatorOptions::assembledOnce(), progress);
+  TexelDomain domain(std::move(paged.mesh), paged.layout.width, paged.layout.height,
+                     OperatorOptions::assembledOnce(), progress);
   timer.lap("operators");
-  const ReactionResult result = reactionDiffusion(domain, args.options, args.steps, progress);
+  // Only M is kept for the steps: S and the rest are freed once both systems are formed.
+  const ReactionResult result =
+      reactionDiffusion(domain, domain.releaseOperators(), args.options, args.steps, progress);
   timer.lap("steps");
   const Image padded = dilateGutters(domain.mesh(), domain.atlas(), domain.grid(), result.image);
   const PixelFormat stored = runStage(progress, "write", [&] {

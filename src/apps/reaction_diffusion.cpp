@@ -95,6 +95,37 @@ void pinNegligibleTexels(const SparseMatrixd& mass, SparseMatrixd& system) {
     if (diagonal(t) < floor) system.coeffRef(t, t) += floor;
 }
 
+/// M + dtD S on M's pattern (a copy of it allocated to size: no sparse merge, whose result
+/// Eigen over-allocates), with negligible texels pinned.
+SparseMatrixd diffusionSystem(const TexelOperators& ops, double dtD) {
+  SparseMatrixd system = ops.combined([dtD](Eigen::Index, Eigen::Index, double mass,
+                                            double stiffness) { return mass + dtD * stiffness; });
+  pinNegligibleTexels(ops.mass(), system);
+  return system;
+}
+
+/// M of operators handed over, in its own storage; S, the basis and the rest are freed.
+SparseMatrixd keepOnlyMass(std::unique_ptr<TexelOperators> operators) {
+  return TexelOperators::combined(
+      std::move(operators), [](Eigen::Index, Eigen::Index, double mass, double) { return mass; });
+}
+
+/// The operators handed over to a ReactionDiffusion; throws InvalidInputError unless they are
+/// the domain's.
+const TexelOperators& handedOver(const std::unique_ptr<TexelOperators>& operators,
+                                 const TexelDomain& domain) {
+  if (!operators || operators->mass().rows() != domain.unknowns())
+    throw InvalidInputError(
+        "ReactionDiffusion: the operators handed over are not the domain's "
+        "(TexelDomain::releaseOperators)");
+  return *operators;
+}
+
+const ReactionDiffusionOptions& validated(const ReactionDiffusionOptions& options) {
+  options.validate();
+  return options;
+}
+
 /// Value below which a fraction q of the total weight lies (weights >= 0).
 double weightedQuantile(const Eigen::VectorXd& values, const Eigen::VectorXd& weights, double q) {
   std::vector<int> order(static_cast<size_t>(values.size()));
@@ -107,6 +138,42 @@ double weightedQuantile(const Eigen::VectorXd& values, const Eigen::VectorXd& we
     if (cumulative >= target) return values(i);
   }
   return values(order.back());
+}
+
+/// reactionImage of u, with surface-area weights M 1.
+Image stateImage(const TexelGrid& grid, const SparseMatrixd& mass, const Eigen::VectorXd& u) {
+  Image image(grid.imageWidth, grid.imageHeight, 1, PixelFormat::UInt8);
+  if (u.size() != grid.unknownCount())
+    throw InvalidInputError("reactionImage: " + std::to_string(u.size()) + " values for " +
+                            std::to_string(grid.unknownCount()) + " unknowns");
+  if (u.size() == 0) return image;
+  // The clamped values become the shown ones in place, once the weights are freed.
+  Eigen::VectorXd shown = u.cwiseMax(0.0).cwiseMin(1.0);
+  double low = 0.0, high = 0.0;
+  {
+    const Eigen::VectorXd weight = mass * Eigen::VectorXd::Ones(u.size());
+    low = weightedQuantile(shown, weight, kDisplayQuantile);
+    high = weightedQuantile(shown, weight, 1.0 - kDisplayQuantile);
+  }
+  if (high > low)
+    shown = ((high - shown.array()) / (high - low)).cwiseMax(0.0).cwiseMin(1.0);
+  else
+    shown.setZero();
+  scatterTexels(grid, shown, image);
+  return image;
+}
+
+/// Runs `steps` time steps of a freshly set-up model and collects the one-shot result.
+ReactionResult runToResult(ReactionDiffusion& model, int steps, const ProgressCallback& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  model.run(steps, progress);
+  ReactionResult result;
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // The image first: its temporaries and the copies of u and v are not alive together.
+  result.image = model.image();
+  result.u = model.u();
+  result.v = model.v();
+  return result;
 }
 
 }  // namespace
@@ -149,16 +216,35 @@ void ReactionDiffusionOptions::validate() const {
 struct ReactionDiffusion::Impl {
   const TexelDomain& domain;
   ReactionDiffusionOptions options;
+  /// The domain's operators, or null when they were handed over (then only ownedMass is kept).
+  const TexelOperators* operators;
+  SparseMatrixd ownedMass;
   SystemSolver solverU, solverV;
   Eigen::VectorXd u, v;
   int steps = 0;
   SolveReport reports[2];
 
-  Impl(const TexelDomain& d, const ReactionDiffusionOptions& o)
-      : domain(d), options(o), solverU(d.grid(), o.solver), solverV(d.grid(), o.solver) {}
+  /// Seeds the state and sets up both solvers from `ops`; if `owned` (holding `ops`) is given,
+  /// keeps only its M once both systems are formed, before the solvers' set-up.
+  Impl(const TexelDomain& d, const ReactionDiffusionOptions& o, const TexelOperators& ops,
+       std::unique_ptr<TexelOperators> owned)
+      : domain(d),
+        options(o),
+        operators(owned ? nullptr : &ops),
+        solverU(d.grid(), o.solver),
+        solverV(d.grid(), o.solver) {
+    seedState(ops, options.seed);
+    const double dt = options.timeStep;
+    SparseMatrixd systemU = diffusionSystem(ops, dt * options.diffusionU);
+    SparseMatrixd systemV = diffusionSystem(ops, dt * options.diffusionV);
+    if (owned) ownedMass = keepOnlyMass(std::move(owned));
+    solverU.initAndUpdate(std::move(systemU));
+    solverV.initAndUpdate(std::move(systemV));
+  }
 
-  void seedState(uint64_t seed) {
-    const TexelOperators& ops = domain.operators();
+  const SparseMatrixd& mass() const { return operators ? operators->mass() : ownedMass; }
+
+  void seedState(const TexelOperators& ops, uint64_t seed) {
     const TexturedMesh& mesh = domain.mesh();
     const double surfaceArea = ops.report().metric.surfaceArea;
     // Seed radius is given on the unit-area surface; centres and distances are in mesh units.
@@ -190,19 +276,14 @@ struct ReactionDiffusion::Impl {
 };
 
 ReactionDiffusion::ReactionDiffusion(const TexelDomain& domain,
-                                     const ReactionDiffusionOptions& options) {
-  options.validate();
-  impl_ = std::make_unique<Impl>(domain, options);
-  const TexelOperators& ops = domain.operators();
-  const double dt = options.timeStep;
-  SparseMatrixd systemU = ops.mass() + (dt * options.diffusionU) * ops.stiffness();
-  SparseMatrixd systemV = ops.mass() + (dt * options.diffusionV) * ops.stiffness();
-  pinNegligibleTexels(ops.mass(), systemU);
-  pinNegligibleTexels(ops.mass(), systemV);
-  impl_->solverU.initAndUpdate(std::move(systemU));
-  impl_->solverV.initAndUpdate(std::move(systemV));
-  impl_->seedState(options.seed);
-}
+                                     const ReactionDiffusionOptions& options)
+    : impl_(std::make_unique<Impl>(domain, validated(options), domain.operators(), nullptr)) {}
+
+ReactionDiffusion::ReactionDiffusion(const TexelDomain& domain,
+                                     std::unique_ptr<TexelOperators> operators,
+                                     const ReactionDiffusionOptions& options)
+    : impl_(std::make_unique<Impl>(domain, validated(options), handedOver(operators, domain),
+                                   std::move(operators))) {}
 
 ReactionDiffusion::~ReactionDiffusion() = default;
 
@@ -218,25 +299,31 @@ void ReactionDiffusion::setState(Eigen::VectorXd u, Eigen::VectorXd v) {
 }
 
 void ReactionDiffusion::reseed(uint64_t seed) {
-  impl_->seedState(seed);
+  if (!impl_->operators)
+    throw InvalidInputError(
+        "ReactionDiffusion::reseed: the operators were handed over (seeding needs them)");
+  impl_->seedState(*impl_->operators, seed);
 }
 
 void ReactionDiffusion::step() {
   Impl& s = *impl_;
-  const SparseMatrixd& mass = s.domain.operators().mass();
+  const SparseMatrixd& mass = s.mass();
   const double dt = s.options.timeStep, feed = s.options.feed, kill = s.options.kill;
-  const Eigen::ArrayXd cu = s.u.array().cwiseMax(0.0).cwiseMin(1.0);
-  const Eigen::ArrayXd cv = s.v.array().cwiseMax(0.0).cwiseMin(1.0);
-  const Eigen::ArrayXd uvv = cu * cv * cv;
-  const Eigen::VectorXd targetU = (s.u.array() + dt * (feed * (1.0 - cu) - uvv)).matrix();
-  const Eigen::VectorXd targetV = (s.v.array() + dt * (uvv - (feed + kill) * cv)).matrix();
-  // The explicit targets are the initial guesses: their residual is the diffusion increment only.
-  Eigen::MatrixXd x = targetU;
-  s.reports[0] = s.solverU.solve(mass * targetU, x);
-  s.u = x.col(0);
-  x = targetV;
-  s.reports[1] = s.solverV.solve(mass * targetV, x);
-  s.v = x.col(0);
+  // The explicit targets c + dt R(u, v) are the initial guesses (their residual is the
+  // diffusion increment only), formed in one pass straight into the solves' storage.
+  const Eigen::Index n = s.u.size();
+  Eigen::MatrixXd xU(n, 1), xV(n, 1);
+  for (Eigen::Index t = 0; t < n; ++t) {
+    const double cu = std::clamp(s.u(t), 0.0, 1.0), cv = std::clamp(s.v(t), 0.0, 1.0);
+    const double uvv = cu * cv * cv;
+    xU(t) = s.u(t) + dt * (feed * (1.0 - cu) - uvv);
+    xV(t) = s.v(t) + dt * (uvv - (feed + kill) * cv);
+  }
+  s.reports[0] = s.solverU.solve(mass * xU.col(0), xU);
+  s.u = xU.col(0);
+  xU.resize(0, 1);
+  s.reports[1] = s.solverV.solve(mass * xV.col(0), xV);
+  s.v = xV.col(0);
   ++s.steps;
 }
 
@@ -263,37 +350,26 @@ const SolveReport& ReactionDiffusion::lastReport(int species) const {
   return impl_->reports[species == 0 ? 0 : 1];
 }
 
+Image ReactionDiffusion::image() const {
+  return stateImage(impl_->domain.grid(), impl_->mass(), impl_->u);
+}
+
 Image reactionImage(const TexelDomain& domain, const Eigen::VectorXd& u) {
-  const TexelGrid& grid = domain.grid();
-  Image image(grid.imageWidth, grid.imageHeight, 1, PixelFormat::UInt8);
-  if (u.size() != domain.unknowns())
-    throw InvalidInputError("reactionImage: " + std::to_string(u.size()) + " values for " +
-                            std::to_string(domain.unknowns()) + " unknowns");
-  if (u.size() == 0) return image;
-  const Eigen::VectorXd clamped = u.cwiseMax(0.0).cwiseMin(1.0);
-  const Eigen::VectorXd weight =
-      domain.operators().mass() * Eigen::VectorXd::Ones(domain.unknowns());
-  const double low = weightedQuantile(clamped, weight, kDisplayQuantile);
-  const double high = weightedQuantile(clamped, weight, 1.0 - kDisplayQuantile);
-  const Eigen::VectorXd shown =
-      high > low
-          ? Eigen::VectorXd(((high - clamped.array()) / (high - low)).cwiseMax(0.0).cwiseMin(1.0))
-          : Eigen::VectorXd::Zero(u.size());
-  scatterTexels(grid, shown, image);
-  return image;
+  return stateImage(domain.grid(), domain.operators().mass(), u);
 }
 
 ReactionResult reactionDiffusion(const TexelDomain& domain, const ReactionDiffusionOptions& options,
                                  int steps, const ProgressCallback& progress) {
   ReactionDiffusion model(domain, options);
-  const auto start = std::chrono::steady_clock::now();
-  model.run(steps, progress);
-  ReactionResult result;
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  result.u = model.u();
-  result.v = model.v();
-  result.image = reactionImage(domain, result.u);
-  return result;
+  return runToResult(model, steps, progress);
+}
+
+ReactionResult reactionDiffusion(const TexelDomain& domain,
+                                 std::unique_ptr<TexelOperators> operators,
+                                 const ReactionDiffusionOptions& options, int steps,
+                                 const ProgressCallback& progress) {
+  ReactionDiffusion model(domain, std::move(operators), options);
+  return runToResult(model, steps, progress);
 }
 
 }  // namespace texgrad

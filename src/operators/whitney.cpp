@@ -1,6 +1,8 @@
 // Quadrature-based operators that need basis values at points: the Whitney Hodge star *1
 // (degree 6, paper Sec. 5.2) and the right-hand sides mass_h(psi), div_h(omega) (paper Sec. 5.3).
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 
@@ -11,8 +13,39 @@ namespace {
 
 constexpr int kHodgeStarDegree = 6;  // omega_a . omega_b: cubic x cubic
 
-/// Calls visit(face, point, weight, texels, values, gradients) at every quadrature point of M,
-/// face chunks in parallel; each chunk's results go to its own buffer (reduced in chunk order).
+/// Calls visit(buffer, face, point, weight, texels, values, gradients) at every quadrature point
+/// of M on faces [first, last).
+template <typename Buffer, typename Visit>
+void sampleFaces(const fem::TexelBasis& basis, int first, int last, int degree, Buffer& buffer,
+                 Visit& visit) {
+  FaceClip clip;
+  fem::PieceBasis pb;
+  for (int f = first; f < last; ++f) {
+    basis.clipFace(f, clip);
+    for (const auto& piece : clip.pieces) {
+      const auto poly = clip.polygon(piece);
+      if (basis.isPlain(f, poly)) {
+        const auto cell = basis.cellTexels(piece.cellX, piece.cellY);
+        const std::vector<int32_t> texels(cell.begin(), cell.end());
+        detail::PieceSampler::plain(
+            poly, piece.cellX, piece.cellY, degree,
+            [&](const Eigen::Vector2d& p, double w, const auto& v, const auto& g) {
+              visit(buffer, f, p, w, texels, Eigen::VectorXd(v), Eigen::MatrixXd(g));
+            });
+      } else {
+        basis.buildPieceBasis(f, poly, pb);
+        detail::PieceSampler::quadratic(
+            pb, degree,
+            [&](const Eigen::Vector2d& p, double w, const Eigen::VectorXd& v,
+                const Eigen::MatrixXd& g) { visit(buffer, f, p, w, pb.texels, v, g); });
+      }
+    }
+  }
+}
+
+/// Calls visit(buffer, face, point, weight, texels, values, gradients) at every quadrature point
+/// of M, face chunks in parallel; each chunk's results go to its own buffer (kept, in chunk
+/// order).
 template <typename Buffer, typename Visit>
 std::vector<Buffer> sampleSurface(const fem::TexelBasis& basis, int grain, int degree,
                                   Visit&& visit) {
@@ -20,33 +53,44 @@ std::vector<Buffer> sampleSurface(const fem::TexelBasis& basis, int grain, int d
   const int chunks = (faces + grain - 1) / grain;
   std::vector<Buffer> buffers(chunks);
   tbb::parallel_for(0, chunks, [&](int c) {
-    FaceClip clip;
-    fem::PieceBasis pb;
-    for (int f = c * grain; f < std::min(faces, (c + 1) * grain); ++f) {
-      basis.clipFace(f, clip);
-      for (const auto& piece : clip.pieces) {
-        const auto poly = clip.polygon(piece);
-        if (basis.isPlain(f, poly)) {
-          const auto cell = basis.cellTexels(piece.cellX, piece.cellY);
-          const std::vector<int32_t> texels(cell.begin(), cell.end());
-          detail::PieceSampler::plain(poly, piece.cellX, piece.cellY, degree,
-                                      [&](const Eigen::Vector2d& p, double w, const auto& v,
-                                          const auto& g) {
-                                        visit(buffers[c], f, p, w, texels, Eigen::VectorXd(v),
-                                              Eigen::MatrixXd(g));
-                                      });
-        } else {
-          basis.buildPieceBasis(f, poly, pb);
-          detail::PieceSampler::quadratic(pb, degree,
-                                          [&](const Eigen::Vector2d& p, double w,
-                                              const Eigen::VectorXd& v, const Eigen::MatrixXd& g) {
-                                            visit(buffers[c], f, p, w, pb.texels, v, g);
-                                          });
-        }
-      }
-    }
+    sampleFaces(basis, c * grain, std::min(faces, (c + 1) * grain), degree, buffers[c], visit);
   });
   return buffers;
+}
+
+using Contributions = std::vector<std::pair<int32_t, double>>;
+
+/// Sum of the (unknown, value) contributions visit emits at every quadrature point of M, over n
+/// unknowns. Face chunks are sampled in parallel and added in chunk order, each chunk's buffer
+/// freed once added: the same sums, in the same order, as keeping every buffer and adding them
+/// afterwards, but only a few chunks' buffers are alive at once (all of them took ~1.4 kB per
+/// active texel at degree 4, spot 2048²: docs/memory.md, Reaction-diffusion).
+template <typename Visit>
+Eigen::VectorXd sumOverSurface(const fem::TexelBasis& basis, int grain, int degree, int n,
+                               Visit&& visit) {
+  const int faces = basis.faceCount();
+  const int chunks = (faces + grain - 1) / grain;
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(n);
+  int next = 0;
+  const auto inFlight = static_cast<size_t>(2 * tbb::this_task_arena::max_concurrency());
+  const auto chunkIndices = tbb::make_filter<void, int>(tbb::filter_mode::serial_in_order,
+                                                        [&](tbb::flow_control& control) {
+                                                          if (next == chunks) control.stop();
+                                                          return next++;
+                                                        });
+  const auto sampleChunk =
+      tbb::make_filter<int, Contributions>(tbb::filter_mode::parallel, [&](int c) {
+        Contributions buffer;
+        sampleFaces(basis, c * grain, std::min(faces, (c + 1) * grain), degree, buffer, visit);
+        return buffer;
+      });
+  const auto addInOrder = tbb::make_filter<Contributions, void>(tbb::filter_mode::serial_in_order,
+                                                                [&](const Contributions& buffer) {
+                                                                  for (const auto& [u, v] : buffer)
+                                                                    out[u] += v;
+                                                                });
+  tbb::parallel_pipeline(inFlight, chunkIndices & sampleChunk & addInOrder);
+  return out;
 }
 
 /// Entries of *1 summed over the quadrature points of one piece at a time (its texels, hence its
@@ -88,34 +132,26 @@ struct StarSums {
   }
 };
 
-using Contributions = std::vector<std::pair<int32_t, double>>;
-
-Eigen::VectorXd reduce(const std::vector<Contributions>& buffers, int n) {
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(n);
-  for (const auto& buffer : buffers)
-    for (const auto& [u, v] : buffer) out[u] += v;
-  return out;
-}
-
 }  // namespace
 
 Eigen::VectorXd TexelOperators::massOf(const SurfaceScalar& psi, int degree) const {
   const auto& factors = impl_->factors;
-  const auto buffers = sampleSurface<Contributions>(
-      impl_->basis, impl_->options.facesPerTask, degree,
-      [&](Contributions& out, int f, const Eigen::Vector2d& p, double w,
-          const std::vector<int32_t>& texels, const Eigen::VectorXd& values, const Eigen::MatrixXd&) {
-        const double value = w * factors[f].mass * psi({f, p});
-        for (size_t k = 0; k < texels.size(); ++k)
-          if (texels[k] >= 0 && values[k] != 0.0) out.emplace_back(texels[k], value * values[k]);
-      });
-  return reduce(buffers, impl_->basis.grid().unknownCount());
+  return sumOverSurface(impl_->basis, impl_->options.facesPerTask, degree,
+                        impl_->basis.grid().unknownCount(),
+                        [&](Contributions& out, int f, const Eigen::Vector2d& p, double w,
+                            const std::vector<int32_t>& texels, const Eigen::VectorXd& values,
+                            const Eigen::MatrixXd&) {
+                          const double value = w * factors[f].mass * psi({f, p});
+                          for (size_t k = 0; k < texels.size(); ++k)
+                            if (texels[k] >= 0 && values[k] != 0.0)
+                              out.emplace_back(texels[k], value * values[k]);
+                        });
 }
 
 Eigen::VectorXd TexelOperators::divergenceOf(const SurfaceOneForm& omega, int degree) const {
   const auto& factors = impl_->factors;
-  const auto buffers = sampleSurface<Contributions>(
-      impl_->basis, impl_->options.facesPerTask, degree,
+  return sumOverSurface(
+      impl_->basis, impl_->options.facesPerTask, degree, impl_->basis.grid().unknownCount(),
       [&](Contributions& out, int f, const Eigen::Vector2d& p, double w,
           const std::vector<int32_t>& texels, const Eigen::VectorXd&, const Eigen::MatrixXd& g) {
         const auto& m = factors[f];
@@ -124,7 +160,6 @@ Eigen::VectorXd TexelOperators::divergenceOf(const SurfaceOneForm& omega, int de
         for (size_t k = 0; k < texels.size(); ++k)
           if (texels[k] >= 0) out.emplace_back(texels[k], w * g.row(k).dot(raised));
       });
-  return reduce(buffers, impl_->basis.grid().unknownCount());
 }
 
 SparseMatrixd TexelOperators::hodgeStar1() const {

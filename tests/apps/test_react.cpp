@@ -145,6 +145,26 @@ TEST(React, SameSeedSameOutput) {
   EXPECT_GT((c.v - a.v).lpNorm<Eigen::Infinity>(), 1e-3) << "another seed moves the spots";
 }
 
+TEST(React, HandingTheOperatorsOverGivesTheSameResult) {
+  // The one-shot path keeps only M once both systems are formed; states and image must not move.
+  TexelDomain shared(procedural::cubeSphere(8), 96, 64);
+  TexelDomain handed(procedural::cubeSphere(8), 96, 64);
+  ReactionDiffusionOptions options;
+  options.timeStep = 5.0;  // a pattern forms within the steps, so any change to M or A shows
+  const ReactionResult a = reactionDiffusion(shared, options, 60);
+  const ReactionResult b = reactionDiffusion(handed, handed.releaseOperators(), options, 60);
+  EXPECT_GT(a.v.maxCoeff(), 0.05) << "the spots must still be there";
+  EXPECT_EQ(a.u, b.u);
+  EXPECT_EQ(a.v, b.v);
+  EXPECT_EQ(a.image.pixels, b.image.pixels);
+  EXPECT_FALSE(handed.hasOperators());
+
+  TexelDomain other(procedural::cubeSphere(8), 96, 64);
+  ReactionDiffusion model(other, other.releaseOperators(), options);
+  EXPECT_THROW(model.reseed(2), InvalidInputError) << "seeding needs the operators";
+  EXPECT_THROW(ReactionDiffusion bad(shared, nullptr, options), InvalidInputError);
+}
+
 TEST(React, PresetsAndOptions) {
   EXPECT_EQ(parseReactionPreset("stripes"), ReactionPreset::Stripes);
   EXPECT_EQ(parseReactionPreset("dots"), ReactionPreset::Dots);

@@ -72,13 +72,20 @@ class ReactionDiffusion {
  public:
   /// Sets up both solvers and the seeded initial state (options.seed).
   ReactionDiffusion(const TexelDomain& domain, const ReactionDiffusionOptions& options);
+  /// As above, for a caller done with the operators (`operators`: the domain's, handed over by
+  /// TexelDomain::releaseOperators): once both systems are formed, only M is kept (S, the basis
+  /// and the rest are freed, ~80 bytes per active texel at spot 2048²). Same states, bit for
+  /// bit; reseed() then throws InvalidInputError (seeding needs the basis).
+  ReactionDiffusion(const TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+                    const ReactionDiffusionOptions& options);
   ~ReactionDiffusion();
   ReactionDiffusion(const ReactionDiffusion&) = delete;
   ReactionDiffusion& operator=(const ReactionDiffusion&) = delete;
 
   /// Replaces the state (unknownCount values each); throws InvalidInputError on a size mismatch.
   void setState(Eigen::VectorXd u, Eigen::VectorXd v);
-  /// Resets to the seeded initial state for `seed`.
+  /// Resets to the seeded initial state for `seed`; throws InvalidInputError if the operators
+  /// were handed over to the constructor.
   void reseed(uint64_t seed);
   /// One time step.
   void step();
@@ -93,6 +100,9 @@ class ReactionDiffusion {
   int stepsTaken() const;
   /// Solve reports of the last step: [0] for u, [1] for v.
   const SolveReport& lastReport(int species) const;
+  /// reactionImage of the current state, from the model's own M (also once the operators were
+  /// handed over).
+  Image image() const;
 
  private:
   struct Impl;
@@ -115,5 +125,14 @@ struct ReactionResult {
 /// One-shot: seeded state, `steps` time steps, image.
 ReactionResult reactionDiffusion(const TexelDomain& domain, const ReactionDiffusionOptions& options,
                                  int steps, const ProgressCallback& progress = {});
+
+/// As above, for a caller done with the operators (handed over by
+/// TexelDomain::releaseOperators): S and the rest are freed once both systems are formed, only
+/// M is kept for the steps (the ReactionDiffusion constructor that takes them). Same result, bit
+/// for bit.
+ReactionResult reactionDiffusion(const TexelDomain& domain,
+                                 std::unique_ptr<TexelOperators> operators,
+                                 const ReactionDiffusionOptions& options, int steps,
+                                 const ProgressCallback& progress = {});
 
 }  // namespace texgrad
