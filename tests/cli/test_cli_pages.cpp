@@ -407,6 +407,16 @@ std::pair<double, double> tilesVersusQuadrants(const std::function<Image(const c
   return {worst, range};
 }
 
+/// The float outputs t.TILE.exr in `dir` equal the quadrants of s.exr (to kPagesCliTolerance)
+/// and hold the stitched photos (a value range above 0.1).
+void expectTilesMatchTheSingleImage(const std::filesystem::path& dir) {
+  const auto [worst, range] = tilesVersusQuadrants(
+      [&](const char* name) { return readImage(dir / ("t." + std::string(name) + ".exr")); },
+      readImage(dir / "s.exr"));
+  EXPECT_GT(range, 0.1);
+  EXPECT_LT(worst, kPagesCliTolerance);
+}
+
 TEST(CliPages, TextureFromPhotosOverUdimTilesMatchesTheSingleImage) {
   const auto dir = tempDir("cli_pages_texture");
   writeTiledPhotoScene(dir);
@@ -421,11 +431,7 @@ TEST(CliPages, TextureFromPhotosOverUdimTilesMatchesTheSingleImage) {
   const CliResult a = texture(true, "t.<UDIM>.exr"), b = texture(false, "s.exr");
   ASSERT_EQ(a.status, 0) << a.err;
   ASSERT_EQ(b.status, 0) << b.err;
-  const auto [worst, range] = tilesVersusQuadrants(
-      [&](const char* name) { return readImage(dir / ("t." + std::string(name) + ".exr")); },
-      readImage(dir / "s.exr"));
-  EXPECT_GT(range, 0.1);  // the photos were stitched into it
-  EXPECT_LT(worst, kPagesCliTolerance);
+  expectTilesMatchTheSingleImage(dir);
   std::filesystem::remove_all(dir);
 }
 
@@ -460,11 +466,7 @@ TEST(CliPages, ProjectAndStitchOverUdimTilesMatchTheSingleImage) {
   const CliResult a = runCli(stitchTiles, dir), b = runCli(stitch(false, "ps", "s.exr"), dir);
   ASSERT_EQ(a.status, 0) << a.err;
   ASSERT_EQ(b.status, 0) << b.err;
-  const auto [worst, range] = tilesVersusQuadrants(
-      [&](const char* name) { return readImage(dir / ("t." + std::string(name) + ".exr")); },
-      readImage(dir / "s.exr"));
-  EXPECT_GT(range, 0.1);  // the photos were stitched into it
-  EXPECT_LT(worst, kPagesCliTolerance);
+  expectTilesMatchTheSingleImage(dir);
   // In a --partials pattern %04d is the view number, not a UDIM token: the views renamed
   // q-0000.1001.png, ... stitch to the same tiles.
   for (const auto& entry : std::filesystem::directory_iterator(dir / "pt")) {
