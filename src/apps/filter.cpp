@@ -3,9 +3,14 @@
 // also holds the soft seam energy alpha lambda E_C (paper §4.2, Fig. 5).
 #include "texgrad/apps/filter.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <numeric>
 #include <optional>
+#include <span>
 #include <utility>
+#include <vector>
 
 #include "texgrad/apps/normal_map.h"
 #include "texgrad/apps/texel_signal.h"
@@ -36,21 +41,144 @@ BarelyCoveredNeighbours barelyBound(const TexelDomain& domain, const TexelOperat
   return barelyCoveredNeighbours(ops.mass(), barelyCoveredUnknowns(domain));
 }
 
-/// alpha M x0 + S_beta x0 with one product held at a time. The same operations, in the same
-/// order, as InteractiveFilter's from its stored M x0 and S x0, so the same bits.
-Eigen::MatrixXd screenedRightHandSide(const TexelOperators& ops, const Eigen::MatrixXd& x0,
-                                      const FilterOptions& options) {
-  Eigen::MatrixXd rhs, product;
-  if (options.betaPerCell.empty()) {
-    symmetricProduct(ops.mass(), x0, rhs);
-    symmetricProduct(ops.stiffness(), x0, product);
-    rhs = options.alpha * rhs + options.beta * product;
-  } else {
-    symmetricProduct(ops.modulatedStiffness(options.betaPerCell), x0, rhs);
-    symmetricProduct(ops.mass(), x0, product);
-    rhs += options.alpha * product;
+/// Values of an 8-bit channel.
+constexpr size_t kByteLevels = 256;
+
+/// The values the one-shot filter reads x0 from, a channel at a time: a float image, or an 8-bit
+/// texture held as its levels (exactByteLevels), each read as the float it decodes to. Either
+/// way the values of gatherTexels(grid, image), bit for bit.
+class TexelValues {
+ public:
+  /// `image` (and `levels`, if given: then image's pixels may be empty) must outlive this.
+  TexelValues(const TexelGrid& grid, const Image& image, const std::vector<uint8_t>* levels)
+      : grid_(grid), image_(image), levels_(levels) {
+    if (image.width != grid.imageWidth || image.height != grid.imageHeight)
+      throw InvalidInputError("texture is " + std::to_string(image.width) + "x" +
+                              std::to_string(image.height) + " but the texel grid was built for " +
+                              std::to_string(grid.imageWidth) + "x" +
+                              std::to_string(grid.imageHeight));
+    if (levels) {
+      std::array<uint8_t, kByteLevels> all{};
+      std::iota(all.begin(), all.end(), uint8_t{0});
+      levelValues_ = valuesOfByteLevels(all);
+    }
+  }
+  int channels() const { return image_.channels; }
+  /// gatherTexels(grid, image)(u, c): the nearest image texel for active texels outside it.
+  double operator()(int u, int c) const {
+    const int t = grid_.texelOfUnknown[static_cast<size_t>(u)];
+    const int i = std::clamp(t % grid_.nx + grid_.x0, 0, image_.width - 1);
+    const int j = std::clamp(t / grid_.nx + grid_.y0, 0, image_.height - 1);
+    const size_t k = image_.index(i, j, c);
+    return levels_ ? levelValues_[(*levels_)[k]] : image_.pixels[k];
+  }
+  /// Channel c at every unknown (unknowns x 1).
+  Eigen::MatrixXd channel(int c) const {
+    Eigen::MatrixXd values(grid_.unknownCount(), 1);
+    for (int u = 0; u < grid_.unknownCount(); ++u) values(u, 0) = (*this)(u, c);
+    return values;
+  }
+  /// Every channel at `unknowns` (row i for unknowns[i]).
+  Eigen::MatrixXd rows(std::span<const int32_t> unknowns) const {
+    Eigen::MatrixXd values(static_cast<Eigen::Index>(unknowns.size()), channels());
+    for (size_t i = 0; i < unknowns.size(); ++i)
+      for (int c = 0; c < channels(); ++c)
+        values(static_cast<Eigen::Index>(i), c) = (*this)(unknowns[i], c);
+    return values;
+  }
+
+ private:
+  const TexelGrid& grid_;
+  const Image& image_;
+  const std::vector<uint8_t>* levels_;
+  std::vector<float> levelValues_;
+};
+
+/// alpha M x0 + S_beta x0, one n x 1 block per channel, with one channel of x0 and one product
+/// held at a time. The same operations per value, in the same order, as InteractiveFilter's
+/// from its stored M x0 and S x0, so the same bits; with beta 0 and no map S x0 is not formed
+/// (InteractiveFilter adds 0 S x0, which changes no value but the sign of a zero).
+std::vector<Eigen::MatrixXd> screenedRightHandSide(const TexelOperators& ops, const TexelValues& x0,
+                                                   const FilterOptions& options) {
+  std::vector<Eigen::MatrixXd> rhs(static_cast<size_t>(x0.channels()));
+  const bool mapped = !options.betaPerCell.empty();
+  const Eigen::SparseMatrix<double> modulated =
+      mapped ? ops.modulatedStiffness(options.betaPerCell) : Eigen::SparseMatrix<double>();
+  Eigen::MatrixXd product;
+  for (int c = 0; c < x0.channels(); ++c) {
+    Eigen::MatrixXd& b = rhs[static_cast<size_t>(c)];
+    const Eigen::MatrixXd x0c = x0.channel(c);
+    if (mapped) {
+      symmetricProduct(modulated, x0c, b);
+      symmetricProduct(ops.mass(), x0c, product);
+      b += options.alpha * product;
+    } else if (options.beta == 0.0) {
+      symmetricProduct(ops.mass(), x0c, b);
+      b *= options.alpha;
+    } else {
+      symmetricProduct(ops.mass(), x0c, b);
+      symmetricProduct(ops.stiffness(), x0c, product);
+      b = options.alpha * b + options.beta * product;
+    }
   }
   return rhs;
+}
+
+/// The report of k single-channel solves run in turn, as one solve: iterations summed (the
+/// V-cycles or CG iterations, each on one channel); residuals[i] the largest relative residual
+/// ||b_c - A x_c|| / ||b_c|| over the channels after i iterations of each (a channel that
+/// stopped earlier counts with its last), so residuals.back() is the worst channel's final one;
+/// rmsChange[i] over all channels' i-th iterations (a finished channel counts as no change);
+/// converged if every channel converged, diverged if one diverged; phase times summed.
+SolveReport combinedReport(const std::vector<SolveReport>& reports) {
+  SolveReport all;
+  all.converged = !reports.empty();
+  size_t length = 0;
+  for (const SolveReport& r : reports) {
+    all.iterations += r.iterations;
+    all.converged = all.converged && r.converged;
+    all.diverged = all.diverged || r.diverged;
+    all.times.relaxation += r.times.relaxation;
+    all.times.boundary += r.times.boundary;
+    all.times.coarse += r.times.coarse;
+    all.times.transfer += r.times.transfer;
+    all.times.matvec += r.times.matvec;
+    all.times.preconditioner += r.times.preconditioner;
+    all.times.other += r.times.other;
+    length = std::max(length, r.residuals.size());
+  }
+  all.residuals.assign(length, 0.0);
+  all.rmsChange.assign(length > 0 ? length - 1 : 0, 0.0);
+  for (const SolveReport& r : reports) {
+    for (size_t i = 0; i < length && !r.residuals.empty(); ++i)
+      all.residuals[i] =
+          std::max(all.residuals[i], r.residuals[std::min(i, r.residuals.size() - 1)]);
+    for (size_t i = 0; i < r.rmsChange.size() && i < all.rmsChange.size(); ++i)
+      all.rmsChange[i] += r.rmsChange[i] * r.rmsChange[i] / static_cast<double>(reports.size());
+  }
+  for (double& change : all.rmsChange) change = std::sqrt(change);
+  return all;
+}
+
+/// Runs `solveChannel(c, progress)` for each of `channels` in turn and combines the reports
+/// (combinedReport). `progress` sees one "solve" stage across them: fraction (c + f) / channels
+/// and the iterations done in all channels so far, of channels times each solve's most.
+template <typename SolveChannel>
+SolveReport solveEachChannel(int channels, const ProgressCallback& progress,
+                             SolveChannel&& solveChannel) {
+  std::vector<SolveReport> reports;
+  int done = 0;
+  for (int c = 0; c < channels; ++c) {
+    ProgressCallback channelProgress;
+    if (progress)
+      channelProgress = [&progress, c, channels, done](const Progress& p) {
+        return progress(
+            Progress{p.stage, (c + p.fraction) / channels, done + p.step, channels * p.steps});
+      };
+    reports.push_back(solveChannel(c, channelProgress));
+    done += reports.back().iterations;
+  }
+  return combinedReport(reports);
 }
 
 /// The solution `values` (unknowns x channels, already bounded) in `input`'s storage: active
@@ -75,30 +203,51 @@ Image filteredImage(const TexelGrid& grid, Image input, Image decoded, bool norm
 }
 
 /// The one-shot filter on `ops`; `owned`, if given, holds `ops` and is freed before set-up.
+/// Solves one channel at a time (solveEachChannel): the multigrid's level vectors and CG's work
+/// vectors hold one channel, not all; x0 exists a channel at a time, for the right-hand side
+/// and again as each channel's initial guess, so no n x k block lives through the set-up.
 FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
                         std::unique_ptr<TexelOperators> owned, Image texture,
                         const FilterOptions& options, const ProgressCallback& progress) {
   options.validate();
   checkBetaMap(domain, options.betaPerCell);
-  SystemSolver solver(domain.grid(), options.solver);
+  std::optional<SystemSolver> solver(std::in_place, domain.grid(), options.solver);
   Image decoded = options.normalMap ? decodeNormalMap(texture) : Image();
-  // x0, then the initial guess and the solution in the same storage.
-  Eigen::MatrixXd x = gatherTexels(domain.grid(), options.normalMap ? decoded : texture);
   // Until the result is written, an 8-bit texture is held as its levels: 1 byte per value
   // instead of a float (38 MB less from here to the write-back at spot 2048²).
   std::optional<std::vector<uint8_t>> levels = exactByteLevels(texture);
   if (levels) texture.pixels = std::vector<float>();
+  const TexelValues x0 = options.normalMap
+                             ? TexelValues(domain.grid(), decoded, nullptr)
+                             : TexelValues(domain.grid(), texture, levels ? &*levels : nullptr);
   const BarelyCoveredNeighbours barely = barelyBound(domain, ops, options);
-  const Eigen::MatrixXd barelyX0 = x(barely.unknowns, Eigen::all);
-  const Eigen::MatrixXd rhs = screenedRightHandSide(ops, x, options);
+  const Eigen::MatrixXd barelyX0 = x0.rows(barely.unknowns);
+  std::vector<Eigen::MatrixXd> rhs = screenedRightHandSide(ops, x0, options);
   // From here on only A is needed: formed in M's storage when the operators are ours, which
   // frees S with them (`ops` is not used again).
   Eigen::SparseMatrix<double> system =
       owned ? TexelOperators::screenedSystem(std::move(owned), options.alpha)
             : ops.screenedSystem(options.alpha);
-  solver.initAndUpdate(std::move(system), progress);
+  solver->initAndUpdate(std::move(system), progress);
   FilterResult result;
-  result.report = solver.solve(rhs, x, progress);
+  std::vector<Eigen::MatrixXd> solved(rhs.size());
+  result.report = solveEachChannel(
+      x0.channels(), progress, [&](int c, const ProgressCallback& channelProgress) {
+        const auto k = static_cast<size_t>(c);
+        solved[k] = x0.channel(c);  // the initial guess
+        const SolveReport report = solver->solve(rhs[k], solved[k], channelProgress);
+        rhs[k] = Eigen::MatrixXd();
+        return report;
+      });
+  result.initSeconds = solver->initSeconds();
+  result.updateSeconds = solver->updateSeconds();
+  result.solverStorageBytes = solver->storageBytes();
+  solver.reset();
+  Eigen::MatrixXd x(domain.unknowns(), x0.channels());
+  for (size_t k = 0; k < solved.size(); ++k) {
+    x.col(static_cast<Eigen::Index>(k)) = solved[k];
+    solved[k] = Eigen::MatrixXd();
+  }
   boundBarelyCovered(barely, barelyX0, x);
   if (levels) {
     texture.pixels = valuesOfByteLevels(*levels);
@@ -106,8 +255,6 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
   }
   result.image =
       filteredImage(domain.grid(), std::move(texture), std::move(decoded), options.normalMap, x);
-  result.initSeconds = solver.initSeconds();
-  result.updateSeconds = solver.updateSeconds();
   return result;
 }
 
@@ -172,7 +319,20 @@ SolveReport InteractiveFilter::step(const ProgressCallback& progress) {
 }
 
 SolveReport InteractiveFilter::solve(const ProgressCallback& progress) {
-  return solver_.solve(rhs_, x_, progress);
+  // Channel by channel, as the one-shot filter solves (the same iterates, so the same image).
+  return solveEachChannel(static_cast<int>(x_.cols()), progress,
+                          [&](int c, const ProgressCallback& channelProgress) {
+                            const Eigen::MatrixXd b = rhs_.col(c);
+                            Eigen::MatrixXd x = x_.col(c);
+                            try {
+                              const SolveReport report = solver_.solve(b, x, channelProgress);
+                              x_.col(c) = x;
+                              return report;
+                            } catch (const Cancelled&) {
+                              x_.col(c) = x;  // the iterate the cancelled solve reached
+                              throw;
+                            }
+                          });
 }
 
 Image InteractiveFilter::image() const {

@@ -270,6 +270,79 @@ TEST(Filter, OneShotRunsGiveTheInteractiveFiltersImageBitForBit) {
   }
 }
 
+/// How much larger the channel-by-channel solve's error to the direct solution may be than the
+/// all-channel solve's (both stop at a relative residual of 1e-4; measured equal to 5 digits).
+constexpr double kNoWorse = 1.05;
+/// Slack on the solver's relative residual for the solution's rounding to the float image.
+constexpr double kFloatImageSlack = 1e-6;
+
+TEST(Filter, ChannelByChannelSolveMeetsTheToleranceInEachChannelAndMatchesTheAllChannelSolve) {
+  const TexelDomain domain(procedural::cubeSphere(8), 128, 128);
+  const TexelOperators& ops = domain.operators();
+  const Image texture = test::randomTexture(128, 128, 3, 17);
+  FilterOptions options = withSolver(SolverKind::MultigridCg, 0.3);
+  options.rawSolution = true;  // x itself, not bounded
+  const FilterResult oneShot = filterTexture(domain, texture, options);
+  const Eigen::MatrixXd x = gatherTexels(domain.grid(), oneShot.image);
+  // The same system, solved for all channels at once and directly.
+  const Eigen::MatrixXd x0 = gatherTexels(domain.grid(), texture);
+  const Eigen::MatrixXd b =
+      options.alpha * (ops.mass() * x0) + options.beta * (ops.stiffness() * x0);
+  const Eigen::SparseMatrix<double> a = ops.screenedSystem(options.alpha);
+  SystemSolver all(domain.grid(), options.solver);
+  all.initAndUpdate(a);
+  Eigen::MatrixXd xAll = x0;
+  ASSERT_TRUE(all.solve(b, xAll).converged);
+  SystemSolver direct(domain.grid(), withSolver(SolverKind::Direct, 0.3).solver);
+  direct.initAndUpdate(a);
+  Eigen::MatrixXd xDirect;
+  direct.solve(b, xDirect);
+
+  const double tolerance = options.solver.tolerance;
+  ASSERT_EQ(oneShot.report.residuals.size(), oneShot.report.rmsChange.size() + 1);
+  EXPECT_TRUE(oneShot.report.converged);
+  EXPECT_LE(oneShot.report.residuals.back(), tolerance) << "the worst channel's residual";
+  for (Eigen::Index c = 0; c < x.cols(); ++c) {
+    const double residual = (b.col(c) - a * x.col(c)).norm() / b.col(c).norm();
+    EXPECT_LE(residual, tolerance + kFloatImageSlack) << "channel " << c;
+  }
+  // Each channel converged on its own is as close to the exact solution as all channels
+  // converged together (measured: max 0.0178 of an 8-bit step both, 7.6e-6 steps apart).
+  const auto rms = [](const Eigen::MatrixXd& e) {
+    return std::sqrt(e.squaredNorm() / static_cast<double>(e.size()));
+  };
+  EXPECT_LE(rms(x - xDirect), kNoWorse * rms(xAll - xDirect));
+  EXPECT_LE((x - xDirect).cwiseAbs().maxCoeff(), kNoWorse * (xAll - xDirect).cwiseAbs().maxCoeff());
+}
+
+TEST(Filter, OneSolveStageAcrossTheChannelsAndACancelInTheSecondChannel) {
+  const TexelDomain domain(procedural::cubeSphere(8), 128, 128);
+  const Image texture = test::randomTexture(128, 128, 3, 19);
+  const FilterOptions options = withSolver(SolverKind::MultigridCg, 0.2);
+  std::vector<Progress> solve;
+  const FilterResult result = filterTexture(domain, texture, options, [&](const Progress& p) {
+    if (p.stage == "solve") solve.push_back(p);
+    return true;
+  });
+  ASSERT_FALSE(solve.empty());
+  for (size_t k = 1; k < solve.size(); ++k) {
+    EXPECT_GE(solve[k].fraction, solve[k - 1].fraction) << "report " << k;
+    EXPECT_GE(solve[k].step, solve[k - 1].step) << "report " << k;
+  }
+  for (const Progress& p : solve) EXPECT_EQ(p.steps, 3 * options.solver.maxIterations);
+  EXPECT_EQ(solve.back().fraction, 1.0);
+  EXPECT_EQ(solve.back().step, result.report.iterations);
+  // Past half the stage the second channel is solving: a cancel there still stops the filter.
+  bool cancelled = false;
+  EXPECT_THROW(filterTexture(domain, texture, options,
+                             [&](const Progress& p) {
+                               cancelled = p.stage == "solve" && p.fraction > 0.5;
+                               return !cancelled;
+                             }),
+               Cancelled);
+  EXPECT_TRUE(cancelled);
+}
+
 TEST(Filter, OperatorsHandedOverOnceAndOnlyTheDomainsAreAccepted) {
   TexelDomain domain(procedural::cube(3), 96, 64);
   const TexelDomain other(procedural::cylinder(), 96, 64);

@@ -2,6 +2,7 @@
 // opening seams, globally (beta) or locally (a per-cell beta map).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -48,17 +49,26 @@ struct FilterOptions {
 
 /// Output of filterTexture: the image plus what the solve did.
 struct FilterResult {
-  Image image;         ///< same size, channels and format as the input; inactive texels kept
-  SolveReport report;  ///< iterations, residuals, phase times
+  Image image;  ///< same size, channels and format as the input; inactive texels kept
+  /// The solve, one channel at a time, as one (iterations summed over the channels; residuals[i]
+  /// the largest relative residual ||b_c - A x_c|| / ||b_c|| over the channels after i
+  /// iterations of each, so residuals.back() is the worst channel's final one; converged if
+  /// every channel converged); phase times summed.
+  SolveReport report;
   double initSeconds = 0.0, updateSeconds = 0.0;
+  /// SystemSolver::storageBytes() after the last channel's solve (its level vectors hold one
+  /// channel).
+  int64_t solverStorageBytes = 0;
 };
 
-/// Filters `texture` (at the domain's resolution). Multigrid starts from the input texture.
-/// Reports stages "solver setup" and "solve" (with the cycle or iteration count) to `progress`,
-/// which may cancel (Cancelled). Keeps neither M x0 nor S x0 (InteractiveFilter keeps them for
-/// new parameters), holds an 8-bit texture as its levels during set-up and solve
-/// (exactByteLevels), and writes the result into `texture`'s storage: move a texture in that
-/// the caller no longer needs.
+/// Filters `texture` (at the domain's resolution), solving for one channel at a time with the
+/// same solver (its vectors then hold one channel, not all); the iterative kinds start from the
+/// input texture. Reports stages "solver setup" and "solve" to `progress`, which may cancel
+/// (Cancelled): "solve" goes once from 0 to 1 over all channels, its step counting the V-cycles
+/// or CG iterations of every channel so far, of channels times the most per channel. Keeps neither
+/// M x0 nor S x0 (InteractiveFilter keeps them for new parameters), holds an 8-bit texture as its
+/// levels during set-up and solve (exactByteLevels), and writes the result into `texture`'s
+/// storage: move a texture in that the caller no longer needs.
 FilterResult filterTexture(const TexelDomain& domain, Image texture, const FilterOptions& options,
                            const ProgressCallback& progress = {});
 
@@ -81,8 +91,9 @@ class InteractiveFilter {
   void setParameters(double alpha, double beta, std::vector<double> betaPerCell = {});
   /// One V-cycle (or an exact solve with the direct solver) towards the current target.
   SolveReport step(const ProgressCallback& progress = {});
-  /// Runs the configured number of cycles (or the direct solve), reporting stage "solve" to
-  /// `progress` (SystemSolver::solve); after a cancel the filter can solve again.
+  /// Runs the configured number of cycles (or the direct solve) one channel at a time, as
+  /// filterTexture does (the same iterates), reporting stage "solve" to `progress` as it does;
+  /// after a cancel the filter can solve again. The report is combined as FilterResult's.
   SolveReport solve(const ProgressCallback& progress = {});
   /// Current solution as an image (input's size, channels and format; inactive texels as input),
   /// barely covered texels replaced unless FilterOptions::rawSolution.
