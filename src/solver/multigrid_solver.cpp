@@ -251,10 +251,12 @@ struct MultigridSolver<Scalar>::Impl {
           detail::indexUnknowns(grid, lv.sys);
           if (l == 0) assignRowSums(grid, a);
           detail::assignBoundary(grid, a, lv.sys);
-          detail::assignStencils<T>(grid, a, lv.sys, lv.stencil);
           detail::assignLines<T>(grid, a, lv.sys, options.lineRatio, lv.lines, lv.lineCoeffs);
         }
-        detail::releaseUnknownIndex(lv.sys);  // the cycles never read it
+        // The cycles never read the unknown index, nor does assignStencils: it goes before the
+        // stencils, the level's largest array, are allocated (lower peak memory).
+        detail::releaseUnknownIndex(lv.sys);
+        if (numericPhase) detail::assignStencils<T>(grid, a, lv.sys, lv.stencil);
       }
       if (l == coarsest()) {
         // A one-level hierarchy is solved directly: only then is A^0 formed (unless handed over).
