@@ -190,7 +190,7 @@ struct SystemSolver::Impl {
   }
 
   /// Takes over `from` as A; hands it to `factorise` (the direct or multigrid set-up), then frees
-  /// it unless keepsMatrix().
+  /// it unless keepsMatrix() (setUpMultigrid hands it over to be freed inside the set-up).
   template <typename F>
   void adoptMatrix(Eigen::SparseMatrix<double>& from, F&& factorise) {
     a.swap(from);
@@ -200,6 +200,20 @@ struct SystemSolver::Impl {
     cacheValid = false;
     factorise(a);
     if (!keepsMatrix()) Eigen::SparseMatrix<double>().swap(a);
+  }
+
+  /// Runs `setUp` (a MultigridSolver's update or initAndUpdate) on the adopted A: as a view
+  /// while keepsMatrix(), else handing A over, so the set-up frees it once level 0 and A^1 are
+  /// built instead of holding it while the coarser levels are (docs/memory.md).
+  template <typename SetUp>
+  void setUpMultigrid(Eigen::SparseMatrix<double>& adopted, SetUp&& setUp) {
+    visitMultigrid([&](auto& solver) {
+      if (keepsMatrix())
+        setUp(solver, std::as_const(adopted));
+      else
+        setUp(solver, std::move(adopted));
+      return 0;
+    });
   }
 
   template <typename F>
@@ -404,13 +418,12 @@ void SystemSolver::update(Eigen::SparseMatrix<double>&& a, const ProgressCallbac
   reportProgress(progress, kSetupStage, 0.0);
   const auto start = std::chrono::steady_clock::now();
   // Swaps, as Eigen 3.4's SparseMatrix assignment would copy even from std::move.
-  impl_->adoptMatrix(a, [&](const Eigen::SparseMatrix<double>& adopted) {
+  impl_->adoptMatrix(a, [&](Eigen::SparseMatrix<double>& adopted) {
     if (impl_->settings.kind == SolverKind::Direct)
       impl_->direct.factorize(adopted);
     else
-      impl_->visitMultigrid([&](auto& solver) {
-        solver.update(adopted);
-        return 0;
+      impl_->setUpMultigrid(adopted, [](auto& solver, auto&& matrix) {
+        solver.update(std::forward<decltype(matrix)>(matrix));
       });
   });
   impl_->updateTime = secondsSince(start);
@@ -427,10 +440,9 @@ void SystemSolver::initAndUpdate(Eigen::SparseMatrix<double>&& a,
   }
   reportProgress(progress, kSetupStage, 0.0);
   const auto start = std::chrono::steady_clock::now();
-  impl_->adoptMatrix(a, [&](const Eigen::SparseMatrix<double>& adopted) {
-    impl_->visitMultigrid([&](auto& solver) {
-      solver.initAndUpdate(impl_->grid, adopted);
-      return 0;
+  impl_->adoptMatrix(a, [&](Eigen::SparseMatrix<double>& adopted) {
+    impl_->setUpMultigrid(adopted, [&](auto& solver, auto&& matrix) {
+      solver.initAndUpdate(impl_->grid, std::forward<decltype(matrix)>(matrix));
     });
   });
   impl_->initTime = secondsSince(start);

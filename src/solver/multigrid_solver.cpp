@@ -59,6 +59,12 @@ void shiftDiagonal(Eigen::SparseMatrix<double>& a) {
       if (it.row() == k) it.valueRef() += shift;
 }
 
+/// Bytes of a compressed sparse matrix's arrays (values, row indices, column starts).
+int64_t sparseBytes(const Eigen::SparseMatrix<double>& a) {
+  return static_cast<int64_t>(a.nonZeros()) * int64_t(sizeof(double) + sizeof(int)) +
+         (a.outerSize() > 0 ? a.outerSize() + 1 : 0) * int64_t(sizeof(int));
+}
+
 using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point start) {
@@ -171,6 +177,7 @@ struct MultigridSolver<Scalar>::Impl {
   GridHierarchy hierarchy;
   std::vector<Level> levels;
   std::vector<int64_t> nonZeros;  // per level, of A^l
+  std::vector<int64_t> heldMatrixBytes;  // per level (MultigridLevelInfo::setUpMatrixBytes)
   std::vector<T> rowSums;         // per slot of level 0: sum of A^0's row (applyOperator)
   CholmodSolver coarseSolver;
   Eigen::MatrixXd coarseWork;
@@ -199,12 +206,16 @@ struct MultigridSolver<Scalar>::Impl {
   /// products never drop an entry, so the values do not change any pattern);
   /// `numericPhase` fills stencils and boundary data and factorises. Both at once cost one
   /// chain of Galerkin products instead of two. A^{l+1} is formed before level l's data are
-  /// filled in, so the product's temporaries never coexist with them (lower peak memory).
-  void walkLevels(const SparseSum& a0, bool symbolicPhase, bool numericPhase) {
+  /// filled in, so the product's temporaries never coexist with them (lower peak memory), and
+  /// A^l is freed once both exist. `handedOver`, if given, is the matrix a0 views, owned by the
+  /// walk: it is freed like A^l, so A^0 is not held while the coarser levels are built.
+  void walkLevels(const SparseSum& a0, bool symbolicPhase, bool numericPhase,
+                  Eigen::SparseMatrix<double>* handedOver = nullptr) {
     if (symbolicPhase) {
       levels.clear();
       levels.resize(static_cast<size_t>(hierarchy.levelCount()));
       nonZeros.assign(levels.size(), 0);
+      heldMatrixBytes.assign(levels.size(), 0);
       coarseSolver = CholmodSolver();
     }
     Eigen::SparseMatrix<double> coarse;  // A^l for l > 0
@@ -213,6 +224,7 @@ struct MultigridSolver<Scalar>::Impl {
       const size_t sl = static_cast<size_t>(l);
       const GridLevel& grid = hierarchy.level(l);
       Level& lv = levels[sl];
+      heldMatrixBytes[sl] = 0;
       if (symbolicPhase) {
         lv.boxRows = detail::boxRowsOf(grid);
         nonZeros[sl] = a.nonZeros();
@@ -239,22 +251,31 @@ struct MultigridSolver<Scalar>::Impl {
           detail::indexUnknowns(grid, lv.sys);
           if (l == 0) assignRowSums(grid, a);
           detail::assignBoundary(grid, a, lv.sys);
-          detail::assignStencils<T>(grid, a, lv.sys, lv.stencil);
           detail::assignLines<T>(grid, a, lv.sys, options.lineRatio, lv.lines, lv.lineCoeffs);
         }
-        detail::releaseUnknownIndex(lv.sys);  // the cycles never read it
+        // The cycles never read the unknown index, nor does assignStencils: it goes before the
+        // stencils, the level's largest array, are allocated (lower peak memory).
+        detail::releaseUnknownIndex(lv.sys);
+        if (numericPhase) detail::assignStencils<T>(grid, a, lv.sys, lv.stencil);
       }
       if (l == coarsest()) {
-        // A one-level hierarchy is solved directly: only then is A^0 formed.
+        // A one-level hierarchy is solved directly: only then is A^0 formed (unless handed over).
         const Eigen::SparseMatrix<double> formed =
-            l == 0 ? a0.toMatrix() : Eigen::SparseMatrix<double>();
-        const Eigen::SparseMatrix<double>& direct = l == 0 ? formed : coarse;
+            l == 0 && !handedOver ? a0.toMatrix() : Eigen::SparseMatrix<double>();
+        const Eigen::SparseMatrix<double>& direct =
+            l > 0 ? coarse : (handedOver ? *handedOver : formed);
         if (symbolicPhase) coarseSolver.analyzePattern(direct);
         if (numericPhase) coarseSolver.factorize(direct);
-      } else {
+        heldMatrixBytes[sl] = sparseBytes(formed);
+      }
+      // The matrices held now, with level l's data: A^l (A^0 only if handed over) and A^{l+1}.
+      heldMatrixBytes[sl] +=
+          sparseBytes(coarse) + sparseBytes(next) + (handedOver ? sparseBytes(*handedOver) : 0);
+      if (l < coarsest()) {
         coarse.swap(next);  // next now holds A^l, freed at the end of this iteration
         a = SparseSum(coarse);
       }
+      if (l == 0 && handedOver) Eigen::SparseMatrix<double>().swap(*handedOver);  // A^0
     }
   }
 
@@ -278,9 +299,10 @@ struct MultigridSolver<Scalar>::Impl {
     stats.initSeconds += secondsSince(start);
   }
 
-  void symbolic(const SparseSum& pattern, bool numericToo) {
+  void symbolic(const SparseSum& pattern, bool numericToo,
+                Eigen::SparseMatrix<double>* handedOver = nullptr) {
     const auto start = Clock::now();
-    walkLevels(pattern, true, numericToo);
+    walkLevels(pattern, true, numericToo, handedOver);
     initialised = true;
     updated = numericToo;
     channels = 0;
@@ -294,10 +316,10 @@ struct MultigridSolver<Scalar>::Impl {
     refreshCounters();
   }
 
-  void numeric(const SparseSum& a0) {
+  void numeric(const SparseSum& a0, Eigen::SparseMatrix<double>* handedOver = nullptr) {
     if (!initialised) throw InvalidInputError("MultigridSolver::update called before init");
     const auto start = Clock::now();
-    walkLevels(a0, false, true);
+    walkLevels(a0, false, true, handedOver);
     updated = true;
     times = {};
     ++stats.updates;
@@ -522,8 +544,28 @@ void MultigridSolver<Scalar>::initAndUpdate(const TexelGrid& grid, const SparseS
 }
 
 template <typename Scalar>
+void MultigridSolver<Scalar>::initAndUpdate(const TexelGrid& grid,
+                                            Eigen::SparseMatrix<double>&& a) {
+  Eigen::SparseMatrix<double> owned;  // swapped: Eigen 3.4's SparseMatrix cannot be moved
+  owned.swap(a);
+  const SparseSum view(owned);  // throws (a already empty) if `owned` is not compressed
+  impl_->arena.execute([&] {
+    impl_->buildHierarchy(grid);
+    impl_->symbolic(view, true, &owned);
+  });
+}
+
+template <typename Scalar>
 void MultigridSolver<Scalar>::update(const SparseSum& a) {
   impl_->arena.execute([&] { impl_->numeric(a); });
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::update(Eigen::SparseMatrix<double>&& a) {
+  Eigen::SparseMatrix<double> owned;
+  owned.swap(a);
+  const SparseSum view(owned);
+  impl_->arena.execute([&] { impl_->numeric(view, &owned); });
 }
 
 template <typename Scalar>
@@ -706,6 +748,7 @@ std::vector<MultigridLevelInfo> MultigridSolver<Scalar>::levelInfo() const {
     i.factorNonZeros = i.direct ? m.coarseSolver.stats().factorNonZeros
                                 : lv.sys.boundarySolver.stats().factorNonZeros;
     i.slots = m.hierarchy.level(l).slotCount;
+    i.setUpMatrixBytes = m.heldMatrixBytes[static_cast<size_t>(l)];
     info.push_back(i);
   }
   return info;

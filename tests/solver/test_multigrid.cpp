@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <sstream>
+#include <vector>
 
 #include "synthetic_problem.h"
 #include "texgrad/core/error.h"
@@ -135,6 +136,59 @@ TEST(Multigrid, SetUpFromMAndSEqualsSetUpFromTheFormedSystem) {
     }
     EXPECT_EQ(summed.stats().symbolicAnalyses, analyses);
     EXPECT_EQ(summed.stats().updates, 2);
+  }
+}
+
+namespace {
+
+/// Bytes of a compressed matrix with `rows` columns and `nonZeros` entries (values, row indices
+/// and column starts), as the solver counts its set-up matrices.
+int64_t sparseBytes(int64_t rows, int64_t nonZeros) {
+  return nonZeros * int64_t(sizeof(double) + sizeof(int)) + (rows + 1) * int64_t(sizeof(int));
+}
+
+}  // namespace
+
+TEST(Multigrid, HandedOverMatrixGivesTheSameCyclesAndIsFreedWithLevelZero) {
+  // A handed over (a&&) is taken from the caller and gives bit-identical cycles to a view of
+  // the caller's A, for initAndUpdate and update alike. While each level l's data are built the
+  // set-up holds exactly A^l and A^{l+1}: A^0 only at level 0 and only when handed over, no
+  // A^{l-1} (each is freed as soon as the next level's operator and its own data exist).
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  const Eigen::MatrixXd b = test::randomBlock(p.mass.rows(), 3, 9);
+  MultigridOptions o;
+  o.minCoarseUnknowns = 16;
+  MultigridSolver<float> viewed(o), handed(o);
+  for (double alpha : {1e3, 1e1}) {
+    const Eigen::SparseMatrix<double> a = p.system(alpha);
+    Eigen::SparseMatrix<double> given = a;
+    if (alpha == 1e3) {
+      viewed.initAndUpdate(p.grid, a);
+      handed.initAndUpdate(p.grid, std::move(given));
+    } else {
+      viewed.update(a);
+      handed.update(std::move(given));
+    }
+    EXPECT_EQ(given.rows(), 0);
+    EXPECT_EQ(given.nonZeros(), 0);
+    MultigridSolver<float>::Matrix x1 = MultigridSolver<float>::Matrix::Zero(b.rows(), 3), x2 = x1;
+    for (int k = 0; k < 2; ++k) {
+      viewed.cycle(b.cast<float>(), x1);
+      handed.cycle(b.cast<float>(), x2);
+    }
+    EXPECT_GT(x1.norm(), 0.0f);
+    EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0f) << "alpha " << alpha;
+
+    const std::vector<MultigridLevelInfo> info = handed.levelInfo(), seen = viewed.levelInfo();
+    ASSERT_GE(info.size(), 3u);  // A^1 is dropped after a level that also held one
+    const int64_t a0 = sparseBytes(a.rows(), a.nonZeros());
+    for (size_t l = 0; l < info.size(); ++l) {
+      const bool last = l + 1 == info.size();
+      const int64_t own = l == 0 ? 0 : sparseBytes(info[l].unknowns, info[l].nonZeros);
+      const int64_t next = last ? 0 : sparseBytes(info[l + 1].unknowns, info[l + 1].nonZeros);
+      EXPECT_EQ(seen[l].setUpMatrixBytes, own + next) << "level " << l;
+      EXPECT_EQ(info[l].setUpMatrixBytes, own + next + (l == 0 ? a0 : 0)) << "level " << l;
+    }
   }
 }
 

@@ -92,7 +92,8 @@ class SystemSolver {
   void update(const Eigen::SparseMatrix<double>& a, const ProgressCallback& progress = {});
   /// As update, but takes over a's storage (a temporary, or std::move(a): a is left empty)
   /// instead of copying it. Eigen 3.4's SparseMatrix has no move constructor or assignment, so
-  /// this overload is what spares the copy.
+  /// this overload is what spares the copy. A solver that keeps no copy hands A on to the
+  /// multigrid, which frees it once level 0 is built (MultigridSolver::update(a&&)).
   void update(Eigen::SparseMatrix<double>&& a, const ProgressCallback& progress = {});
   /// init(a) then update(a); multigrid forms its Galerkin products once instead of twice.
   void initAndUpdate(const Eigen::SparseMatrix<double>& a, const ProgressCallback& progress = {});

@@ -73,6 +73,9 @@ struct MultigridLevelInfo {
   int64_t boundaryNonZeros = 0; ///< of A_bb^l (of A^l on a coarsest level solved directly)
   int64_t factorNonZeros = 0;   ///< of the Cholesky factor of that block
   int64_t slots = 0;            ///< lattice slots of the level's boxes
+  /// Bytes of the sparse matrices the last set-up held once this level's data were built: A^l
+  /// (A^0 only if handed over, or formed for a direct solve) and A^{l+1} (docs/memory.md).
+  int64_t setUpMatrixBytes = 0;
   bool direct = false;          ///< the coarsest level, solved directly
 };
 
@@ -104,9 +107,14 @@ class MultigridSolver {
   /// formed) must have the pattern given to init and is not referenced afterwards. Throws
   /// NumericalError if a block is not positive definite.
   void update(const SparseSum& a);
+  /// As update, but the solver takes a over (a is left empty) and frees it once level 0's data
+  /// and A^1 exist, before the coarser levels are built: same result, lower peak memory.
+  void update(Eigen::SparseMatrix<double>&& a);
   /// init(grid, a) then update(a) with one chain of Galerkin products instead of two (for
   /// one-shot solves; the result is identical).
   void initAndUpdate(const TexelGrid& grid, const SparseSum& a);
+  /// As initAndUpdate, but the solver takes a over and frees it as update(a&&) does.
+  void initAndUpdate(const TexelGrid& grid, Eigen::SparseMatrix<double>&& a);
   /// One V-cycle (Fig. 8) improving x in place for right-hand side b (both n x k).
   void cycle(const Matrix& b, Matrix& x);
   /// V-cycles from the initial guess x until control is met; residual and change per cycle.
