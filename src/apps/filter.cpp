@@ -319,20 +319,9 @@ SolveReport InteractiveFilter::step(const ProgressCallback& progress) {
 }
 
 SolveReport InteractiveFilter::solve(const ProgressCallback& progress) {
-  // Channel by channel, as the one-shot filter solves (the same iterates, so the same image).
-  return solveEachChannel(static_cast<int>(x_.cols()), progress,
-                          [&](int c, const ProgressCallback& channelProgress) {
-                            const Eigen::MatrixXd b = rhs_.col(c);
-                            Eigen::MatrixXd x = x_.col(c);
-                            try {
-                              const SolveReport report = solver_.solve(b, x, channelProgress);
-                              x_.col(c) = x;
-                              return report;
-                            } catch (const Cancelled&) {
-                              x_.col(c) = x;  // the iterate the cancelled solve reached
-                              throw;
-                            }
-                          });
+  // Every channel at once (unlike the one-shot filter): a cancelled solve leaves all channels
+  // advanced alike, which is what an interactive preview shows.
+  return solver_.solve(rhs_, x_, progress);
 }
 
 Image InteractiveFilter::image() const {

@@ -91,9 +91,9 @@ class InteractiveFilter {
   void setParameters(double alpha, double beta, std::vector<double> betaPerCell = {});
   /// One V-cycle (or an exact solve with the direct solver) towards the current target.
   SolveReport step(const ProgressCallback& progress = {});
-  /// Runs the configured number of cycles (or the direct solve) one channel at a time, as
-  /// filterTexture does (the same iterates), reporting stage "solve" to `progress` as it does;
-  /// after a cancel the filter can solve again. The report is combined as FilterResult's.
+  /// Runs the configured number of cycles (or the direct solve) on every channel at once,
+  /// reporting stage "solve" to `progress` (SystemSolver::solve); after a cancel the filter can
+  /// solve again, every channel advanced alike.
   SolveReport solve(const ProgressCallback& progress = {});
   /// Current solution as an image (input's size, channels and format; inactive texels as input),
   /// barely covered texels replaced unless FilterOptions::rawSolution.
