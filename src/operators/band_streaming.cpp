@@ -44,8 +44,8 @@ void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMet
   const int faces = basis.faceCount();
   const int grain = options.facesPerTask;
   bandCount = band(grid.ny - 1) + 1;
-  // First pass: the covered cells (for M's pattern), the seam pieces (kept to the end: few, as
-  // seams are lines) and the bands of each face's plain pieces.
+  // First pass: the covered cells and the seam pieces' texels (M's pattern), and the bands of
+  // each face's plain pieces.
   std::vector<uint8_t> covered(grid.cellCount(), 0);
   std::vector<int32_t> firstBand(static_cast<size_t>(faces), std::numeric_limits<int32_t>::max());
   std::vector<int32_t> lastBand(static_cast<size_t>(faces), -1);
@@ -67,7 +67,7 @@ void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMet
             firstBand[f] = std::min(firstBand[f], band(piece.cellY));
             lastBand[f] = std::max(lastBand[f], band(piece.cellY));
           } else {
-            addSeamPiece(f, piece, poly, chunk, scratch);
+            addSeamPiece(f, piece, poly, chunk, scratch, false);
           }
         }
       }
@@ -79,6 +79,12 @@ void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMet
   reportProgress(progress, "integrate pieces", 0.6);
   buildPattern(covered);
   std::vector<uint8_t>().swap(covered);
+  // The faces with seam pieces, ascending (`seam` is in face order); their pieces are clipped
+  // and integrated again after the plain ones, rather than held (13 B/t at spot 4096²).
+  std::vector<int32_t> seamFaces;
+  for (const SeamPiece& sp : seam)
+    if (seamFaces.empty() || seamFaces.back() != sp.face) seamFaces.push_back(sp.face);
+  releasePieces();
   reportProgress(progress, "assemble", 0.8);
   factors = factorsOf(faceMetric, "TexelOperators");
   metric = std::move(faceMetric);
@@ -127,10 +133,35 @@ void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMet
     assembleBands(pieces, factors, nullptr, mass.valuePtr(), stiffnessValues.data());
     reportProgress(progress, "assemble", 0.8 + 0.2 * (k + 1) / windows);
   }
-  assembleSeams(factors, nullptr, mass.valuePtr(), stiffnessValues.data());
+  assembleSeamFaces(seamFaces);
   finishStiffness(stiffnessValues.data());
   buildSeamContinuity();
-  releasePieces();
+}
+
+void TexelOperators::Impl::assembleSeamFaces(const std::vector<int32_t>& seamFaces) {
+  // Batches of faces: integrated in parallel, then added in face order (the order of `seam`).
+  const int grain = options.facesPerTask;
+  const auto faces = static_cast<int>(seamFaces.size());
+  const int batch = std::max(grain, (faces + kWindows - 1) / kWindows);
+  for (int first = 0; first < faces; first += batch) {
+    const int last = std::min(faces, first + batch);
+    std::vector<Chunk> chunks(static_cast<size_t>((last - first + grain - 1) / grain));
+    tbb::parallel_for(0, static_cast<int>(chunks.size()), [&](int c) {
+      FaceClip clip;
+      SeamScratch scratch;
+      for (int i = first + c * grain; i < std::min(last, first + (c + 1) * grain); ++i) {
+        const int f = seamFaces[i];
+        basis.clipFace(f, clip);
+        for (const auto& piece : clip.pieces) {
+          const auto poly = clip.polygon(piece);
+          if (!basis.isPlain(f, poly)) addSeamPiece(f, piece, poly, chunks[c], scratch);
+        }
+      }
+    });
+    for (const Chunk& chunk : chunks)
+      assembleSeams(chunk.seam, chunk.texels.data(), chunk.values.data(), factors, nullptr,
+                    mass.valuePtr(), stiffnessValues.data());
+  }
 }
 
 }  // namespace texgrad

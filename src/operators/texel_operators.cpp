@@ -91,15 +91,19 @@ void TexelOperators::Impl::addPlainPiece(int face, const FacePiece& piece,
 
 void TexelOperators::Impl::addSeamPiece(int face, const FacePiece& piece,
                                         std::span<const PieceVertex> poly, Chunk& chunk,
-                                        SeamScratch& scratch) const {
+                                        SeamScratch& scratch, bool integrate) const {
   basis.buildPieceBasis(face, poly, scratch.basis);
-  detail::quadraticIntegrals(scratch.basis, scratch.integrals);
   const std::vector<int32_t>& texels = scratch.basis.texels;
   SeamPiece sp{face, piece.cellX, piece.cellY, 0, 0, 0};
   sp.texelBegin = static_cast<int32_t>(chunk.texels.size());
   sp.valueBegin = static_cast<int64_t>(chunk.values.size());
   chunk.texels.insert(chunk.texels.end(), texels.begin(), texels.end());
   sp.texelEnd = static_cast<int32_t>(chunk.texels.size());
+  if (!integrate) {
+    chunk.seam.push_back(sp);
+    return;
+  }
+  detail::quadraticIntegrals(scratch.basis, scratch.integrals);
   const detail::LocalIntegrals& li = scratch.integrals;
   for (const Eigen::MatrixXd* m : {&li.mass, &li.kxx, &li.kxy, &li.kyy})
     appendUpperTriangle(*m, chunk.values);
@@ -372,7 +376,8 @@ void TexelOperators::Impl::assemble(const std::vector<FaceFactors>& faceFactors,
   for (double* out : {massOut, stiffnessOut})
     if (out) std::fill_n(out, mass.nonZeros(), 0.0);
   assembleBands(plain, faceFactors, beta, massOut, stiffnessOut);
-  assembleSeams(faceFactors, beta, massOut, stiffnessOut);
+  assembleSeams(seam, seamTexels.data(), seamValues.data(), faceFactors, beta, massOut,
+                stiffnessOut);
   if (stiffnessOut) finishStiffness(stiffnessOut);
 }
 
@@ -414,24 +419,24 @@ void TexelOperators::Impl::assembleBands(const PlainPieces& pieces,
   }
 }
 
-void TexelOperators::Impl::assembleSeams(const std::vector<FaceFactors>& faceFactors,
+void TexelOperators::Impl::assembleSeams(std::span<const SeamPiece> pieces, const int32_t* texels,
+                                         const double* values,
+                                         const std::vector<FaceFactors>& faceFactors,
                                          const double* beta, double* massOut,
                                          double* stiffnessOut) const {
   const TexelGrid& grid = basis.grid();
   std::vector<double> combined;
-  for (const SeamPiece& sp : seam) {
+  for (const SeamPiece& sp : pieces) {
     const int k = sp.texelEnd - sp.texelBegin;
     const FaceFactors& f = faceFactors[sp.face];
-    const double* v = seamValues.data() + sp.valueBegin;
+    const double* v = values + sp.valueBegin;
     const int packed = k * (k + 1) / 2;
-    if (massOut)
-      scatter(mass, massOut, seamTexels.data() + sp.texelBegin, k, PackedSymmetric{v}, f.mass);
+    if (massOut) scatter(mass, massOut, texels + sp.texelBegin, k, PackedSymmetric{v}, f.mass);
     if (stiffnessOut) {
       combined.resize(static_cast<size_t>(packed));
       for (int i = 0; i < packed; ++i)
         combined[i] = f.xx * v[packed + i] + f.xy * v[2 * packed + i] + f.yy * v[3 * packed + i];
-      scatter(mass, stiffnessOut, seamTexels.data() + sp.texelBegin, k,
-              PackedSymmetric{combined.data()},
+      scatter(mass, stiffnessOut, texels + sp.texelBegin, k, PackedSymmetric{combined.data()},
               beta ? beta[grid.cellIndex(sp.cellX, sp.cellY)] : 1.0);
     }
   }

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <vector>
 
 #include "piece_integrals.h"
@@ -68,9 +69,10 @@ struct TexelOperators::Impl {
   /// one with its moments.
   static void addPlainPiece(int face, const FacePiece& piece, std::span<const PieceVertex> poly,
                             Chunk& chunk);
-  /// Integrates a piece that is not plain and appends it to the chunk's seam pieces.
+  /// Integrates a piece that is not plain and appends it to the chunk's seam pieces; with
+  /// `integrate` false only its texels (valueBegin 0, no values).
   void addSeamPiece(int face, const FacePiece& piece, std::span<const PieceVertex> poly,
-                    Chunk& chunk, SeamScratch& scratch) const;
+                    Chunk& chunk, SeamScratch& scratch, bool integrate = true) const;
   /// Moves the chunks' seam pieces into `seam`, `seamTexels`, `seamValues` in chunk order.
   void gatherSeamPieces(std::vector<Chunk>& chunks);
   /// The chunks' plain pieces of the bands [firstBand, endBand) sorted by band (stable), each
@@ -86,6 +88,9 @@ struct TexelOperators::Impl {
   /// face's bands, then windows of bands are clipped, integrated and assembled in turn
   /// (band_streaming.cpp). The same sums in the same order as assemble(): bit-identical.
   void assembleStreamed(std::vector<Eigen::Matrix2d> metric, const ProgressCallback& progress);
+  /// Clips the given faces (ascending) again, integrates their seam pieces and adds them into
+  /// M and S in face order, a batch of faces at a time (band_streaming.cpp).
+  void assembleSeamFaces(const std::vector<int32_t>& seamFaces);
   /// C of the soft seam-continuity energy for the bilinear basis (none for the seam-continuous
   /// basis).
   void buildSeamContinuity();
@@ -105,8 +110,10 @@ struct TexelOperators::Impl {
   /// even first, in parallel (two bands of a colour share no column).
   void assembleBands(const PlainPieces& pieces, const std::vector<FaceFactors>& faceFactors,
                      const double* beta, double* massValues, double* stiffnessValues) const;
-  /// Adds the seam pieces (in order) into M's and S_beta's values.
-  void assembleSeams(const std::vector<FaceFactors>& faceFactors, const double* beta,
+  /// Adds seam pieces (in order; their texels and integrals at texelBegin and valueBegin of
+  /// `texels` and `values`) into M's and S_beta's values.
+  void assembleSeams(std::span<const SeamPiece> pieces, const int32_t* texels, const double* values,
+                     const std::vector<FaceFactors>& faceFactors, const double* beta,
                      double* massValues, double* stiffnessValues) const;
   /// Sets S's diagonal to minus the sum of the rest of its column (S 1 = 0; zeroColumnSums).
   void finishStiffness(double* stiffnessValues) const;

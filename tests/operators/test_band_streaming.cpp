@@ -66,6 +66,11 @@ TEST(StreamedAssembly, MatchesTheKeptPiecesBitForBit) {
     expectStreamedMatchesKept(test::twoChartSquare(3, 0.05), resolution, {}, "twoChartDense");
   expectStreamedMatchesKept(test::gridSquare(3, 0.9, 0.8, 0.031, 0.077), 160, {}, "square");
   expectStreamedMatchesKept(test::twoChartSquare(5), 150, bilinear, "twoChart bilinear");
+  // Small tasks: many face chunks per window and per batch of seam faces.
+  OperatorOptions small;
+  small.facesPerTask = 2;
+  expectStreamedMatchesKept(test::cubeSphere(4), 128, small, "sphere, 2 faces per task");
+  expectStreamedMatchesKept(test::twoChartSquare(3, 0.05), 256, small, "twoChartDense, 2 faces");
 }
 
 TEST(StreamedAssembly, DoesNotDependOnTheThreadCount) {
