@@ -2,6 +2,8 @@
 // clipped, integrated and assembled one window of cell-row bands at a time, so that only that
 // window's pieces are ever held (docs/memory.md, plan item 6); the same sums as assemble().
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -139,29 +141,38 @@ void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMet
 }
 
 void TexelOperators::Impl::assembleSeamFaces(const std::vector<int32_t>& seamFaces) {
-  // Batches of faces: integrated in parallel, then added in face order (the order of `seam`).
+  // Chunks of faces integrated in parallel and added in chunk order (the order of `seam`), a few
+  // chunks in flight, as sumOverSurface does.
   const int grain = options.facesPerTask;
   const auto faces = static_cast<int>(seamFaces.size());
-  const int batch = std::max(grain, (faces + kWindows - 1) / kWindows);
-  for (int first = 0; first < faces; first += batch) {
-    const int last = std::min(faces, first + batch);
-    std::vector<Chunk> chunks(static_cast<size_t>((last - first + grain - 1) / grain));
-    tbb::parallel_for(0, static_cast<int>(chunks.size()), [&](int c) {
-      FaceClip clip;
-      SeamScratch scratch;
-      for (int i = first + c * grain; i < std::min(last, first + (c + 1) * grain); ++i) {
-        const int f = seamFaces[i];
-        basis.clipFace(f, clip);
-        for (const auto& piece : clip.pieces) {
-          const auto poly = clip.polygon(piece);
-          if (!basis.isPlain(f, poly)) addSeamPiece(f, piece, poly, chunks[c], scratch);
-        }
+  const int chunks = (faces + grain - 1) / grain;
+  int next = 0;
+  const auto chunkIndices = tbb::make_filter<void, int>(tbb::filter_mode::serial_in_order,
+                                                        [&](tbb::flow_control& control) {
+                                                          if (next == chunks) control.stop();
+                                                          return next++;
+                                                        });
+  const auto integrateChunk = tbb::make_filter<int, Chunk>(tbb::filter_mode::parallel, [&](int c) {
+    Chunk chunk;
+    FaceClip clip;
+    SeamScratch scratch;
+    for (int i = c * grain; i < std::min(faces, (c + 1) * grain); ++i) {
+      const int f = seamFaces[i];
+      basis.clipFace(f, clip);
+      for (const auto& piece : clip.pieces) {
+        const auto poly = clip.polygon(piece);
+        if (!basis.isPlain(f, poly)) addSeamPiece(f, piece, poly, chunk, scratch);
       }
-    });
-    for (const Chunk& chunk : chunks)
-      assembleSeams(chunk.seam, chunk.texels.data(), chunk.values.data(), factors, nullptr,
-                    mass.valuePtr(), stiffnessValues.data());
-  }
+    }
+    return chunk;
+  });
+  const auto addInOrder =
+      tbb::make_filter<Chunk, void>(tbb::filter_mode::serial_in_order, [&](const Chunk& chunk) {
+        assembleSeams(chunk.seam, chunk.texels.data(), chunk.values.data(), factors, nullptr,
+                      mass.valuePtr(), stiffnessValues.data());
+      });
+  tbb::parallel_pipeline(static_cast<size_t>(2 * tbb::this_task_arena::max_concurrency()),
+                         chunkIndices & integrateChunk & addInOrder);
 }
 
 }  // namespace texgrad

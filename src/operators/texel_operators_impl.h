@@ -89,7 +89,7 @@ struct TexelOperators::Impl {
   /// (band_streaming.cpp). The same sums in the same order as assemble(): bit-identical.
   void assembleStreamed(std::vector<Eigen::Matrix2d> metric, const ProgressCallback& progress);
   /// Clips the given faces (ascending) again, integrates their seam pieces and adds them into
-  /// M and S in face order, a batch of faces at a time (band_streaming.cpp).
+  /// M and S in face order, a few chunks of faces in flight (band_streaming.cpp).
   void assembleSeamFaces(const std::vector<int32_t>& seamFaces);
   /// C of the soft seam-continuity energy for the bilinear basis (none for the seam-continuous
   /// basis).
