@@ -1,6 +1,7 @@
 // Operator assembly: (A) per-face clipping and metric-independent integrals in fixed face chunks
 // (parallel), (B) metric/beta-dependent accumulation into a precomputed pattern, cell-row bands in
 // two colours (parallel, disjoint columns), seam pieces last: bit-identical for any thread count.
+// Operators assembled once run A and B window by window instead (band_streaming.cpp).
 #include "texgrad/operators/texel_operators.h"
 
 #include <tbb/parallel_for.h>
@@ -8,6 +9,7 @@
 #include <Eigen/LU>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -78,65 +80,81 @@ OperatorOptions OperatorOptions::assembledOnce() {
 
 int TexelOperators::Impl::band(int cellY) const { return (cellY + 1) / kBandRows; }
 
+void TexelOperators::Impl::addPlainPiece(int face, const FacePiece& piece,
+                                         std::span<const PieceVertex> poly, Chunk& chunk) {
+  if (piece.full)
+    chunk.full.push_back({face, piece.cellX, piece.cellY});
+  else
+    chunk.partial.push_back(
+        {face, piece.cellX, piece.cellY, detail::polygonMoments(poly, piece.cellX, piece.cellY)});
+}
+
+void TexelOperators::Impl::addSeamPiece(int face, const FacePiece& piece,
+                                        std::span<const PieceVertex> poly, Chunk& chunk,
+                                        SeamScratch& scratch, bool integrate) const {
+  basis.buildPieceBasis(face, poly, scratch.basis);
+  const std::vector<int32_t>& texels = scratch.basis.texels;
+  SeamPiece sp{face, piece.cellX, piece.cellY, 0, 0, 0};
+  sp.texelBegin = static_cast<int32_t>(chunk.texels.size());
+  sp.valueBegin = static_cast<int64_t>(chunk.values.size());
+  chunk.texels.insert(chunk.texels.end(), texels.begin(), texels.end());
+  sp.texelEnd = static_cast<int32_t>(chunk.texels.size());
+  if (!integrate) {
+    chunk.seam.push_back(sp);
+    return;
+  }
+  detail::quadraticIntegrals(scratch.basis, scratch.integrals);
+  const detail::LocalIntegrals& li = scratch.integrals;
+  for (const Eigen::MatrixXd* m : {&li.mass, &li.kxx, &li.kxy, &li.kyy})
+    appendUpperTriangle(*m, chunk.values);
+  chunk.seam.push_back(sp);
+}
+
 void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
   const int faces = basis.faceCount();
   const int grain = options.facesPerTask;
   const int chunks = (faces + grain - 1) / grain;
-  struct Chunk {
-    std::vector<FullPiece> full;
-    std::vector<PartialPiece> partial;
-    std::vector<SeamPiece> seam;
-    std::vector<int32_t> texels;
-    std::vector<double> values;
-    int unexpected = 0;
-  };
   std::vector<Chunk> out(chunks);
   tbb::parallel_for(0, chunks, [&](int c) {
     Chunk& chunk = out[c];
     FaceClip clip;
-    fem::PieceBasis pb;
-    detail::LocalIntegrals li;
+    SeamScratch scratch;
     for (int f = c * grain; f < std::min(faces, (c + 1) * grain); ++f) {
       basis.clipFace(f, clip);
       chunk.unexpected += clip.unexpectedCrossings;
       for (const auto& piece : clip.pieces) {
         const auto poly = clip.polygon(piece);
-        if (basis.isPlain(f, poly)) {
-          if (piece.full)
-            chunk.full.push_back({f, piece.cellX, piece.cellY});
-          else
-            chunk.partial.push_back(
-                {f, piece.cellX, piece.cellY, detail::polygonMoments(poly, piece.cellX, piece.cellY)});
-          continue;
-        }
-        basis.buildPieceBasis(f, poly, pb);
-        detail::quadraticIntegrals(pb, li);
-        SeamPiece sp{f, piece.cellX, piece.cellY, static_cast<int32_t>(chunk.texels.size()), 0,
-                     static_cast<int64_t>(chunk.values.size())};
-        chunk.texels.insert(chunk.texels.end(), pb.texels.begin(), pb.texels.end());
-        sp.texelEnd = static_cast<int32_t>(chunk.texels.size());
-        for (const Eigen::MatrixXd* m : {&li.mass, &li.kxx, &li.kxy, &li.kyy})
-          appendUpperTriangle(*m, chunk.values);
-        chunk.seam.push_back(sp);
+        if (basis.isPlain(f, poly))
+          addPlainPiece(f, piece, poly, chunk);
+        else
+          addSeamPiece(f, piece, poly, chunk, scratch);
       }
     }
   });
   reportProgress(progress, "integrate pieces", 0.6);
-  // Seam pieces: concatenated in chunk order, every chunk copied on its own task.
+  for (const Chunk& chunk : out) report.unexpectedCrossings += chunk.unexpected;
+  gatherSeamPieces(out);
+  bandCount = band(basis.grid().ny - 1) + 1;
+  plain = bucketByBand(out, 0, bandCount);
+  report.plainFullPieces = static_cast<int>(plain.full.size());
+  report.plainPartialPieces = static_cast<int>(plain.partial.size());
+  report.seamPieces = static_cast<int>(seam.size());
+}
+
+void TexelOperators::Impl::gatherSeamPieces(std::vector<Chunk>& chunks) {
+  // Concatenated in chunk order, every chunk copied on its own task.
   struct Offsets {
     size_t seam = 0, texels = 0, values = 0;
   };
-  std::vector<Offsets> at(out.size() + 1);
-  for (size_t c = 0; c < out.size(); ++c) {
-    at[c + 1] = {at[c].seam + out[c].seam.size(), at[c].texels + out[c].texels.size(),
-                 at[c].values + out[c].values.size()};
-    report.unexpectedCrossings += out[c].unexpected;
-  }
+  std::vector<Offsets> at(chunks.size() + 1);
+  for (size_t c = 0; c < chunks.size(); ++c)
+    at[c + 1] = {at[c].seam + chunks[c].seam.size(), at[c].texels + chunks[c].texels.size(),
+                 at[c].values + chunks[c].values.size()};
   seam.resize(at.back().seam);
   seamTexels.resize(at.back().texels);
   seamValues.resize(at.back().values);
-  tbb::parallel_for(size_t(0), out.size(), [&](size_t c) {
-    Chunk& chunk = out[c];
+  tbb::parallel_for(size_t(0), chunks.size(), [&](size_t c) {
+    Chunk& chunk = chunks[c];
     std::copy(chunk.texels.begin(), chunk.texels.end(), seamTexels.begin() + at[c].texels);
     std::copy(chunk.values.begin(), chunk.values.end(), seamValues.begin() + at[c].values);
     for (size_t k = 0; k < chunk.seam.size(); ++k) {
@@ -150,37 +168,48 @@ void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
     freeStorage(chunk.texels);
     freeStorage(chunk.values);
   });
-  // Plain pieces: bucketed by band straight from the chunks (a stable sort of their
-  // concatenation), each chunk freed once copied, so no second full copy is ever held.
-  bandCount = band(basis.grid().ny - 1) + 1;
+}
+
+TexelOperators::Impl::PlainPieces TexelOperators::Impl::bucketByBand(std::vector<Chunk>& chunks,
+                                                                     int firstBand,
+                                                                     int endBand) const {
+  // Bucketed straight from the chunks (a stable sort of their concatenation), each chunk freed
+  // once copied, so no second full copy is ever held.
+  PlainPieces out;
+  out.firstBand = firstBand;
+  const auto bands = static_cast<size_t>(endBand - firstBand);
   auto bucket = [&](auto member, auto& sorted, std::vector<int64_t>& begin) {
-    begin.assign(static_cast<size_t>(bandCount) + 1, 0);
-    for (const Chunk& chunk : out)
-      for (const auto& p : chunk.*member) ++begin[static_cast<size_t>(band(p.cellY)) + 1];
-    for (int b = 0; b < bandCount; ++b) begin[b + 1] += begin[b];
+    begin.assign(bands + 1, 0);
+    for (const Chunk& chunk : chunks)
+      for (const auto& p : chunk.*member)
+        ++begin[static_cast<size_t>(band(p.cellY) - firstBand) + 1];
+    for (size_t b = 0; b < bands; ++b) begin[b + 1] += begin[b];
     std::vector<int64_t> cursor(begin.begin(), begin.end() - 1);
     sorted.resize(static_cast<size_t>(begin.back()));
-    for (Chunk& chunk : out) {
-      for (const auto& p : chunk.*member) sorted[cursor[band(p.cellY)]++] = p;
+    for (Chunk& chunk : chunks) {
+      for (const auto& p : chunk.*member) sorted[cursor[band(p.cellY) - firstBand]++] = p;
       freeStorage(chunk.*member);
     }
   };
-  bucket(&Chunk::full, full, fullBandBegin);
-  bucket(&Chunk::partial, partial, partialBandBegin);
-  report.plainFullPieces = static_cast<int>(full.size());
-  report.plainPartialPieces = static_cast<int>(partial.size());
-  report.seamPieces = static_cast<int>(seam.size());
+  bucket(&Chunk::full, out.full, out.fullBandBegin);
+  bucket(&Chunk::partial, out.partial, out.partialBandBegin);
+  return out;
 }
 
-void TexelOperators::Impl::buildPattern() {
+std::vector<uint8_t> TexelOperators::Impl::coveredCells() const {
   const TexelGrid& grid = basis.grid();
-  std::vector<uint8_t> cellCovered(static_cast<size_t>(grid.nx + 1) * (grid.ny + 1), 0);
+  std::vector<uint8_t> covered(grid.cellCount(), 0);
   auto mark = [&](const auto& pieces) {
-    for (const auto& p : pieces) cellCovered[grid.cellIndex(p.cellX, p.cellY)] = 1;
+    for (const auto& p : pieces) covered[grid.cellIndex(p.cellX, p.cellY)] = 1;
   };
-  mark(full);
-  mark(partial);
+  mark(plain.full);
+  mark(plain.partial);
   mark(seam);
+  return covered;
+}
+
+void TexelOperators::Impl::buildPattern(const std::vector<uint8_t>& cellCovered) {
+  const TexelGrid& grid = basis.grid();
   // Extra (column, row) pairs created by seam pieces.
   std::vector<std::pair<int32_t, int32_t>> extra;
   for (const SeamPiece& sp : seam)
@@ -190,20 +219,33 @@ void TexelOperators::Impl::buildPattern() {
   tbb::parallel_sort(extra.begin(), extra.end());
   extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
   const int n = grid.unknownCount();
-  // Column u: the texels of the covered cells around texel u and u's seam pairs, sorted.
+  // Column u: the texels of the covered cells around texel u and u's seam pairs, ascending.
+  // Texel (x + dx, y + dy) shares with u the cells (x - 1 + i, y - 1 + j) with i in I(dx),
+  // j in I(dy): I(-1) = {0}, I(0) = {0, 1}, I(1) = {1}. Unknowns are numbered in row-major
+  // order, so the 3 x 3 neighbours come ascending; seam pairs are merged in.
   using Extra = std::vector<std::pair<int32_t, int32_t>>::const_iterator;
   auto columnOf = [&](int u, Extra& e, std::vector<int32_t>& column) {
     column.clear();
     const int t = grid.texelOfUnknown[u];
     const int x = t % grid.nx, y = t / grid.nx;
-    for (int b = y - 1; b <= y; ++b)
-      for (int a = x - 1; a <= x; ++a) {
-        if (!cellCovered[grid.cellIndex(a, b)]) continue;
-        for (int32_t v : basis.cellTexels(a, b))
-          if (v >= 0) column.push_back(v);
+    bool covered[2][2];  // [j][i]: cell (x - 1 + i, y - 1 + j)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) covered[j][i] = cellCovered[grid.cellIndex(x - 1 + i, y - 1 + j)];
+    for (int dy = -1; dy <= 1; ++dy) {
+      if (y + dy < 0 || y + dy >= grid.ny) continue;
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (x + dx < 0 || x + dx >= grid.nx) continue;
+        bool shared = false;
+        for (int j = std::max(0, dy); j <= std::min(1, dy + 1); ++j)
+          for (int i = std::max(0, dx); i <= std::min(1, dx + 1); ++i) shared |= covered[j][i];
+        const int32_t v = grid.unknownOfTexel[grid.texelIndex(x + dx, y + dy)];
+        if (shared && v >= 0) column.push_back(v);
       }
+    }
+    const auto neighbours = static_cast<std::ptrdiff_t>(column.size());
     for (; e != extra.cend() && e->first == u; ++e) column.push_back(e->second);
-    std::sort(column.begin(), column.end());
+    if (static_cast<std::ptrdiff_t>(column.size()) == neighbours) return;
+    std::inplace_merge(column.begin(), column.begin() + neighbours, column.end());
     column.erase(std::unique(column.begin(), column.end()), column.end());
   };
   // Blocks of unknowns on all cores, twice: count each column into M's column starts, then
@@ -259,6 +301,35 @@ void scatter(const SparseMatrixd& m, double* values, const int32_t* texels, int 
   }
 }
 
+/// Positions in the values of a matrix with the pattern of `m` of the entries (row texels[j],
+/// column texels[i]) of a cell's four texels, at [4 i + j]; -1 where a texel is missing. The
+/// present texels of a cell ascend (unknowns are row-major), so each search starts at the last.
+std::array<int, 16> cellEntries(const SparseMatrixd& m, const std::array<int32_t, 4>& texels) {
+  const int* outer = m.outerIndexPtr();
+  const int* inner = m.innerIndexPtr();
+  std::array<int, 16> at;
+  at.fill(-1);
+  for (int i = 0; i < 4; ++i) {
+    if (texels[i] < 0) continue;
+    const int* begin = inner + outer[texels[i]];
+    const int* end = inner + outer[texels[i] + 1];
+    for (int j = 0; j < 4; ++j) {
+      if (texels[j] < 0) continue;
+      begin = std::lower_bound(begin, end, texels[j]);
+      at[4 * i + j] = static_cast<int>(begin - inner);
+    }
+  }
+  return at;
+}
+
+/// values[at[4 i + j]] += scale * local(j, i) at the entries cellEntries found (as scatter adds).
+void addCell(const std::array<int, 16>& at, const Eigen::Matrix4d& local, double scale,
+             double* values) {
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      if (at[4 * i + j] >= 0) values[at[4 * i + j]] += scale * local(j, i);
+}
+
 /// Neumaier's compensated sum of values[begin, end) without values[skip]: within an ulp of the
 /// exact sum, whatever the cancellation (a column of S mixes entries from 1e-15 to 1e3).
 double sumExcept(const double* values, int begin, int end, int skip) {
@@ -302,47 +373,73 @@ void zeroColumnSums(const SparseMatrixd& m, double* values) {
 
 void TexelOperators::Impl::assemble(const std::vector<FaceFactors>& faceFactors, const double* beta,
                                     double* massOut, double* stiffnessOut) const {
-  const TexelGrid& grid = basis.grid();
   for (double* out : {massOut, stiffnessOut})
     if (out) std::fill_n(out, mass.nonZeros(), 0.0);
+  assembleBands(plain, faceFactors, beta, massOut, stiffnessOut);
+  assembleSeams(seam, seamTexels.data(), seamValues.data(), faceFactors, beta, massOut,
+                stiffnessOut);
+  if (stiffnessOut) finishStiffness(stiffnessOut);
+}
+
+void TexelOperators::Impl::finishStiffness(double* stiffnessOut) const {
+  zeroColumnSums(mass, stiffnessOut);
+}
+
+void TexelOperators::Impl::assembleBands(const PlainPieces& pieces,
+                                         const std::vector<FaceFactors>& faceFactors,
+                                         const double* beta, double* massOut,
+                                         double* stiffnessOut) const {
+  const TexelGrid& grid = basis.grid();
   static const detail::BilinearIntegrals unit = detail::bilinearIntegrals(detail::unitCellMoments());
   auto cellBeta = [&](int a, int b) { return beta ? beta[grid.cellIndex(a, b)] : 1.0; };
-  auto plain = [&](int face, int a, int b, const detail::BilinearIntegrals& in) {
+  auto add = [&](int face, int a, int b, const detail::BilinearIntegrals& in) {
     const FaceFactors& f = faceFactors[face];
-    const auto texels = basis.cellTexels(a, b);
-    if (massOut) scatter(mass, massOut, texels.data(), 4, in.mass, f.mass);
+    const std::array<int, 16> at = cellEntries(mass, basis.cellTexels(a, b));
+    if (massOut) addCell(at, in.mass, f.mass, massOut);
     if (stiffnessOut) {
       const Eigen::Matrix4d s = f.xx * in.kxx + f.xy * in.kxy + f.yy * in.kyy;
-      scatter(mass, stiffnessOut, texels.data(), 4, s, cellBeta(a, b));
+      addCell(at, s, cellBeta(a, b), stiffnessOut);
     }
   };
+  const int first = pieces.firstBand;
+  const int end = first + static_cast<int>(pieces.fullBandBegin.size()) - 1;
   for (int colour = 0; colour < 2; ++colour) {
-    tbb::parallel_for(0, (bandCount + 1 - colour) / 2, [&](int half) {
-      const int b = 2 * half + colour;
-      for (int64_t i = fullBandBegin[b]; i < fullBandBegin[b + 1]; ++i)
-        plain(full[i].face, full[i].cellX, full[i].cellY, unit);
-      for (int64_t i = partialBandBegin[b]; i < partialBandBegin[b + 1]; ++i)
-        plain(partial[i].face, partial[i].cellX, partial[i].cellY,
-              detail::bilinearIntegrals(partial[i].moments));
+    const int start = first + ((first & 1) != colour ? 1 : 0);  // first band of this colour
+    tbb::parallel_for(0, std::max(0, (end - start + 1) / 2), [&](int half) {
+      const int b = start + 2 * half - first;
+      for (int64_t i = pieces.fullBandBegin[b]; i < pieces.fullBandBegin[b + 1]; ++i) {
+        const FullPiece& p = pieces.full[i];
+        add(p.face, p.cellX, p.cellY, unit);
+      }
+      for (int64_t i = pieces.partialBandBegin[b]; i < pieces.partialBandBegin[b + 1]; ++i) {
+        const PartialPiece& p = pieces.partial[i];
+        add(p.face, p.cellX, p.cellY, detail::bilinearIntegrals(p.moments));
+      }
     });
   }
+}
+
+void TexelOperators::Impl::assembleSeams(std::span<const SeamPiece> pieces, const int32_t* texels,
+                                         const double* values,
+                                         const std::vector<FaceFactors>& faceFactors,
+                                         const double* beta, double* massOut,
+                                         double* stiffnessOut) const {
+  const TexelGrid& grid = basis.grid();
   std::vector<double> combined;
-  for (const SeamPiece& sp : seam) {
+  for (const SeamPiece& sp : pieces) {
     const int k = sp.texelEnd - sp.texelBegin;
     const FaceFactors& f = faceFactors[sp.face];
-    const double* v = seamValues.data() + sp.valueBegin;
+    const double* v = values + sp.valueBegin;
     const int packed = k * (k + 1) / 2;
-    if (massOut)
-      scatter(mass, massOut, seamTexels.data() + sp.texelBegin, k, PackedSymmetric{v}, f.mass);
+    if (massOut) scatter(mass, massOut, texels + sp.texelBegin, k, PackedSymmetric{v}, f.mass);
     if (stiffnessOut) {
       combined.resize(static_cast<size_t>(packed));
       for (int i = 0; i < packed; ++i)
         combined[i] = f.xx * v[packed + i] + f.xy * v[2 * packed + i] + f.yy * v[3 * packed + i];
-      scatter(mass, stiffnessOut, seamTexels.data() + sp.texelBegin, k,
-              PackedSymmetric{combined.data()}, cellBeta(sp.cellX, sp.cellY));
+      scatter(mass, stiffnessOut, texels + sp.texelBegin, k, PackedSymmetric{combined.data()},
+              beta ? beta[grid.cellIndex(sp.cellX, sp.cellY)] : 1.0);
     }
   }
-  if (stiffnessOut) zeroColumnSums(mass, stiffnessOut);
 }
 
 TexelOperators::TexelOperators(const TexturedMesh& mesh, const Atlas& atlas,
@@ -351,22 +448,23 @@ TexelOperators::TexelOperators(const TexturedMesh& mesh, const Atlas& atlas,
   options.validate();
   impl_ = std::make_unique<Impl>(mesh, atlas, grid, options);
   reportProgress(progress, "integrate pieces", 0.0);
-  impl_->integratePieces(progress);
-  impl_->buildPattern();
-  reportProgress(progress, "assemble", 0.8);
-  setMetric(fem::immersionMetric(mesh, grid, &impl_->report.metric));
-  if (!options.keepPieceIntegrals) impl_->releasePieces();
+  std::vector<Eigen::Matrix2d> metric = fem::immersionMetric(mesh, grid, &impl_->report.metric);
+  if (options.keepPieceIntegrals) {
+    impl_->integratePieces(progress);
+    impl_->buildPattern(impl_->coveredCells());
+    reportProgress(progress, "assemble", 0.8);
+    setMetric(std::move(metric));
+  } else {
+    impl_->assembleStreamed(std::move(metric), progress);
+  }
   reportProgress(progress, "assemble", 1.0);
 }
 
 void TexelOperators::Impl::releasePieces() {
-  freeStorage(full);
-  freeStorage(partial);
+  plain = {};  // move-assigns empty vectors: frees the storage
   freeStorage(seam);
   freeStorage(seamTexels);
   freeStorage(seamValues);
-  freeStorage(fullBandBegin);
-  freeStorage(partialBandBegin);
   piecesReleased = true;
 }
 
@@ -439,8 +537,9 @@ int64_t TexelOperators::storageBytes() const {
   const Impl& m = *impl_;
   return sparseStorageBytes(m.mass) + sparseStorageBytes(m.seamContinuity) +
          sparseStorageBytes(m.zeroContinuity) +
-         capacityBytes(m.stiffnessValues, m.seamValues, m.fullBandBegin, m.partialBandBegin,
-                       m.seamTexels, m.metric, m.factors, m.full, m.partial, m.seam);
+         capacityBytes(m.stiffnessValues, m.seamValues, m.plain.fullBandBegin,
+                       m.plain.partialBandBegin, m.seamTexels, m.metric, m.factors, m.plain.full,
+                       m.plain.partial, m.seam);
 }
 
 namespace {

@@ -1,9 +1,12 @@
 // State of TexelOperators (private to operators/): per-piece metric-independent integrals grouped
-// by cell-row band and the assembled matrices (which all share mass's sparsity pattern).
+// by cell-row band and the assembled matrices (which all share mass's sparsity pattern). Built
+// either with all pieces kept (re-assembly) or streamed band by band (band_streaming.cpp).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <vector>
 
 #include "piece_integrals.h"
@@ -32,13 +35,62 @@ struct TexelOperators::Impl {
   struct FaceFactors {
     double mass = 0.0, xx = 0.0, xy = 0.0, yy = 0.0;
   };
+  /// Plain pieces of the bands [firstBand, firstBand + bands), sorted by band; within a band in
+  /// face order (and a face's clip order), which fixes the order of the sums into each entry.
+  struct PlainPieces {
+    int firstBand = 0;
+    std::vector<FullPiece> full;
+    std::vector<PartialPiece> partial;
+    std::vector<int64_t> fullBandBegin, partialBandBegin;  ///< bands + 1 starts per list
+  };
+  /// Pieces of a run of faces as one task clips them, in face order; texelBegin and valueBegin
+  /// of its seam pieces index its own texels and values.
+  struct Chunk {
+    std::vector<FullPiece> full;
+    std::vector<PartialPiece> partial;
+    std::vector<SeamPiece> seam;
+    std::vector<int32_t> texels;
+    std::vector<double> values;
+    int unexpected = 0;
+  };
 
   Impl(const TexturedMesh& mesh, const Atlas& atlas, const TexelGrid& grid,
        const OperatorOptions& opts)
       : options(opts), basis(mesh, atlas, grid, {opts.basis}) {}
 
+  /// Clips and integrates every piece, kept in `plain` (all bands) and `seam`.
   void integratePieces(const ProgressCallback& progress);
-  void buildPattern();
+  /// Buffers of a seam piece's integration, reused from piece to piece by one task.
+  struct SeamScratch {
+    fem::PieceBasis basis;
+    detail::LocalIntegrals integrals;
+  };
+  /// Appends a plain piece (polygon `poly` of face f) to the chunk: a full one, or a partial
+  /// one with its moments.
+  static void addPlainPiece(int face, const FacePiece& piece, std::span<const PieceVertex> poly,
+                            Chunk& chunk);
+  /// Integrates a piece that is not plain and appends it to the chunk's seam pieces; with
+  /// `integrate` false only its texels (valueBegin 0, no values).
+  void addSeamPiece(int face, const FacePiece& piece, std::span<const PieceVertex> poly,
+                    Chunk& chunk, SeamScratch& scratch, bool integrate = true) const;
+  /// Moves the chunks' seam pieces into `seam`, `seamTexels`, `seamValues` in chunk order.
+  void gatherSeamPieces(std::vector<Chunk>& chunks);
+  /// The chunks' plain pieces of the bands [firstBand, endBand) sorted by band (stable), each
+  /// chunk's lists freed once copied.
+  PlainPieces bucketByBand(std::vector<Chunk>& chunks, int firstBand, int endBand) const;
+  /// Per cell (TexelGrid::cellIndex): 1 if a kept piece lies in it.
+  std::vector<uint8_t> coveredCells() const;
+  /// M's pattern: column u holds the texels of the covered cells around texel u and u's seam
+  /// pairs (from `seam`).
+  void buildPattern(const std::vector<uint8_t>& cellCovered);
+  /// Builds the pattern and assembles M and S for `metric` band by band without keeping the
+  /// plain pieces: a first pass over the faces finds the covered cells, the seam pieces and each
+  /// face's bands, then windows of bands are clipped, integrated and assembled in turn
+  /// (band_streaming.cpp). The same sums in the same order as assemble(): bit-identical.
+  void assembleStreamed(std::vector<Eigen::Matrix2d> metric, const ProgressCallback& progress);
+  /// Clips the given faces (ascending) again, integrates their seam pieces and adds them into
+  /// M and S in face order, a few chunks of faces in flight (band_streaming.cpp).
+  void assembleSeamFaces(const std::vector<int32_t>& seamFaces);
   /// C of the soft seam-continuity energy for the bilinear basis (none for the seam-continuous
   /// basis).
   void buildSeamContinuity();
@@ -54,6 +106,17 @@ struct TexelOperators::Impl {
   /// null. Changes no member, so the matrices of another metric can be assembled alongside.
   void assemble(const std::vector<FaceFactors>& faceFactors, const double* beta, double* massValues,
                 double* stiffnessValues) const;
+  /// Adds the plain pieces into M's and S_beta's values: bands of one colour (parity) at a time,
+  /// even first, in parallel (two bands of a colour share no column).
+  void assembleBands(const PlainPieces& pieces, const std::vector<FaceFactors>& faceFactors,
+                     const double* beta, double* massValues, double* stiffnessValues) const;
+  /// Adds seam pieces (in order; their texels and integrals at texelBegin and valueBegin of
+  /// `texels` and `values`) into M's and S_beta's values.
+  void assembleSeams(std::span<const SeamPiece> pieces, const int32_t* texels, const double* values,
+                     const std::vector<FaceFactors>& faceFactors, const double* beta,
+                     double* massValues, double* stiffnessValues) const;
+  /// Sets S's diagonal to minus the sum of the rest of its column (S 1 = 0; zeroColumnSums).
+  void finishStiffness(double* stiffnessValues) const;
   /// Frees the piece integrals (OperatorOptions::keepPieceIntegrals = false).
   void releasePieces();
   /// Throws InvalidInputError naming `caller` if the piece integrals were freed.
@@ -65,13 +128,10 @@ struct TexelOperators::Impl {
   OperatorReport report;
   std::vector<Eigen::Matrix2d> metric;
   std::vector<FaceFactors> factors;
-  // Pieces sorted by band (stable); bandBegin* index the first piece of each band.
-  std::vector<FullPiece> full;
-  std::vector<PartialPiece> partial;
+  PlainPieces plain;  ///< all bands' plain pieces while kept (keepPieceIntegrals)
   std::vector<SeamPiece> seam;
   std::vector<int32_t> seamTexels;
   std::vector<double> seamValues;
-  std::vector<int64_t> fullBandBegin, partialBandBegin;
   int bandCount = 0;
   bool piecesReleased = false;       ///< releasePieces() ran: no re-assembly possible
   SparseMatrixd mass;  ///< M; its index arrays are the pattern of every assembled matrix

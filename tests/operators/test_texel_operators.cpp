@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "../fem/fem_fixtures.h"
+#include "texgrad/core/error.h"
 #include "texgrad/operators/texel_operators.h"
 
 namespace texgrad {

@@ -41,8 +41,10 @@ struct OperatorOptions {
   double seamContinuityWeight = 0.0;
   int facesPerTask = 64;  ///< faces per parallel task; fixed so results do not depend on threads
   /// Keep the per-piece integrals after the first assembly, so that setMetric() and
-  /// modulatedStiffness() can re-assemble; false frees them (about 70 bytes per active texel,
-  /// 140 MB for spot at 2048²) for callers that only use M, S and the products below.
+  /// modulatedStiffness() can re-assemble; false never holds them all (40-70 bytes per active
+  /// texel, 140 MB for spot at 2048²): the plain pieces are integrated and assembled a window
+  /// of cell rows at a time, into the same M and S bit for bit, for callers that only use M, S
+  /// and the products below.
   bool keepPieceIntegrals = true;
   /// Checks the options; throws InvalidInputError naming the bad field.
   void validate() const;

@@ -1,0 +1,98 @@
+// Operators assembled once (keepPieceIntegrals = false: plain pieces integrated and assembled a
+// window of bands at a time) against the kept pieces' assembly: the same pattern and the same
+// bits in M, S and C, on procedural meshes at sizes that put window borders in many places, with
+// one thread and with all, and on the shared meshes.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include "../fem/fem_fixtures.h"
+#include "shared_meshes.h"
+#include "texgrad/io/mesh_reader.h"
+#include "texgrad/operators/texel_operators.h"
+
+namespace texgrad {
+namespace {
+
+/// Same index arrays and bit-identical values (memcmp: -0.0 is not 0.0 here).
+::testing::AssertionResult identical(const SparseRefd& a, const SparseRefd& b) {
+  if (a.rows() != b.rows() || a.nonZeros() != b.nonZeros())
+    return ::testing::AssertionFailure()
+           << "sizes differ: " << a.nonZeros() << " / " << b.nonZeros();
+  if (std::memcmp(a.outerIndexPtr(), b.outerIndexPtr(), sizeof(int) * (a.outerSize() + 1)) != 0 ||
+      std::memcmp(a.innerIndexPtr(), b.innerIndexPtr(), sizeof(int) * a.nonZeros()) != 0)
+    return ::testing::AssertionFailure() << "patterns differ";
+  Eigen::Index differing = 0;
+  for (Eigen::Index k = 0; k < a.nonZeros(); ++k)
+    differing += std::memcmp(a.valuePtr() + k, b.valuePtr() + k, sizeof(double)) != 0;
+  if (differing > 0)
+    return ::testing::AssertionFailure() << differing << " of " << a.nonZeros() << " values differ";
+  return ::testing::AssertionSuccess();
+}
+
+/// Builds the operators of `mesh` at resolution x resolution with the pieces kept and once
+/// without, and expects the same operators bit for bit.
+void expectStreamedMatchesKept(const TexturedMesh& mesh, int resolution,
+                               const OperatorOptions& options, const std::string& name) {
+  SCOPED_TRACE(name + " at " + std::to_string(resolution));
+  const Atlas atlas = buildAtlas(mesh);
+  const TexelGrid grid = buildTexelGrid(mesh, atlas, resolution, resolution);
+  OperatorOptions kept = options, once = options;
+  kept.keepPieceIntegrals = true;
+  once.keepPieceIntegrals = false;
+  const TexelOperators a(mesh, atlas, grid, kept);
+  const TexelOperators b(mesh, atlas, grid, once);
+  EXPECT_TRUE(identical(a.mass(), b.mass()));
+  EXPECT_TRUE(identical(a.stiffness(), b.stiffness()));
+  EXPECT_TRUE(identical(a.seamContinuity(), b.seamContinuity()));
+  EXPECT_EQ(a.report().plainFullPieces, b.report().plainFullPieces);
+  EXPECT_EQ(a.report().plainPartialPieces, b.report().plainPartialPieces);
+  EXPECT_EQ(a.report().seamPieces, b.report().seamPieces);
+  EXPECT_EQ(a.report().unexpectedCrossings, b.report().unexpectedCrossings);
+  EXPECT_EQ(a.metric(), b.metric());
+}
+
+TEST(StreamedAssembly, MatchesTheKeptPiecesBitForBit) {
+  OperatorOptions bilinear;
+  bilinear.basis = fem::BasisKind::Bilinear;
+  bilinear.seamContinuityWeight = 0.5;
+  // Sizes from one window (a few bands) to dozens, the borders falling on various rows.
+  for (int resolution : {24, 61, 203})
+    expectStreamedMatchesKept(test::cubeSphere(4), resolution, {}, "sphere");
+  for (int resolution : {96, 333})
+    expectStreamedMatchesKept(test::twoChartSquare(3, 0.05), resolution, {}, "twoChartDense");
+  expectStreamedMatchesKept(test::gridSquare(3, 0.9, 0.8, 0.031, 0.077), 160, {}, "square");
+  expectStreamedMatchesKept(test::twoChartSquare(5), 150, bilinear, "twoChart bilinear");
+  // Small tasks: many face chunks per window and among the seam faces.
+  OperatorOptions small;
+  small.facesPerTask = 2;
+  expectStreamedMatchesKept(test::cubeSphere(4), 128, small, "sphere, 2 faces per task");
+}
+
+TEST(StreamedAssembly, DoesNotDependOnTheThreadCount) {
+  const TexturedMesh mesh = test::cubeSphere(4);
+  const Atlas atlas = buildAtlas(mesh);
+  const TexelGrid grid = buildTexelGrid(mesh, atlas, 160, 160);
+  OperatorOptions options = OperatorOptions::assembledOnce();
+  options.facesPerTask = 3;
+  const TexelOperators all(mesh, atlas, grid, options);
+  std::unique_ptr<TexelOperators> one;
+  {
+    tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    one = std::make_unique<TexelOperators>(mesh, atlas, grid, options);
+  }
+  EXPECT_TRUE(identical(all.mass(), one->mass()));
+  EXPECT_TRUE(identical(all.stiffness(), one->stiffness()));
+}
+
+// A real atlas: seams, slivers, charts of every shape (~1 s per mesh in Release).
+TEST(StreamedAssembly, MatchesTheKeptPiecesOnTheSharedMeshesSlow) {
+  for (const test::SharedMesh& shared : test::sharedMeshes())
+    expectStreamedMatchesKept(readMesh(test::sharedData() / shared.obj), 512, {}, shared.name);
+}
+
+}  // namespace
+}  // namespace texgrad
