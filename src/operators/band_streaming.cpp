@@ -55,24 +55,20 @@ void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMet
     std::vector<Chunk> chunks(static_cast<size_t>((faces + grain - 1) / grain));
     tbb::parallel_for(0, static_cast<int>(chunks.size()), [&](int c) {
       Chunk& chunk = chunks[c];
-      FaceClip clip;
       SeamScratch scratch;
-      for (int f = c * grain; f < std::min(faces, (c + 1) * grain); ++f) {
-        basis.clipFace(f, clip);
-        chunk.unexpected += clip.unexpectedCrossings;
-        for (const auto& piece : clip.pieces) {
-          // Faces of other tasks may share the cell: a relaxed atomic store of the same value.
-          std::atomic_ref<uint8_t>(covered[grid.cellIndex(piece.cellX, piece.cellY)])
-              .store(1, std::memory_order_relaxed);
-          const auto poly = clip.polygon(piece);
-          if (basis.isPlain(f, poly)) {
-            firstBand[f] = std::min(firstBand[f], band(piece.cellY));
-            lastBand[f] = std::max(lastBand[f], band(piece.cellY));
-          } else {
-            addSeamPiece(f, piece, poly, chunk, scratch, false);
-          }
-        }
-      }
+      chunk.unexpected += forEachPiece(
+          c * grain, std::min(faces, (c + 1) * grain), [](int f) { return f; },
+          [&](int f, const FacePiece& piece, std::span<const PieceVertex> poly) {
+            // Faces of other tasks may share the cell: a relaxed atomic store of the same value.
+            std::atomic_ref<uint8_t>(covered[grid.cellIndex(piece.cellX, piece.cellY)])
+                .store(1, std::memory_order_relaxed);
+            if (basis.isPlain(f, poly)) {
+              firstBand[f] = std::min(firstBand[f], band(piece.cellY));
+              lastBand[f] = std::max(lastBand[f], band(piece.cellY));
+            } else {
+              addSeamPiece(f, piece, poly, chunk, scratch, false);
+            }
+          });
     });
     for (const Chunk& chunk : chunks) report.unexpectedCrossings += chunk.unexpected;
     gatherSeamPieces(chunks);
@@ -117,17 +113,14 @@ void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMet
     const auto count = static_cast<int>(windowBegin[k + 1] - windowBegin[k]);
     std::vector<Chunk> chunks(static_cast<size_t>((count + grain - 1) / grain));
     tbb::parallel_for(0, static_cast<int>(chunks.size()), [&](int c) {
-      FaceClip clip;
-      for (int i = c * grain; i < std::min(count, (c + 1) * grain); ++i) {
-        const int f = list[i];
-        basis.clipFace(f, clip);
-        for (const auto& piece : clip.pieces) {
-          const int b = band(piece.cellY);
-          if (b < lo || b >= hi) continue;
-          const auto poly = clip.polygon(piece);
-          if (basis.isPlain(f, poly)) addPlainPiece(f, piece, poly, chunks[c]);
-        }
-      }
+      // Unexpected crossings were counted in the first pass.
+      forEachPiece(
+          c * grain, std::min(count, (c + 1) * grain), [&](int i) { return list[i]; },
+          [&](int f, const FacePiece& piece, std::span<const PieceVertex> poly) {
+            const int b = band(piece.cellY);
+            if (b >= lo && b < hi && basis.isPlain(f, poly))
+              addPlainPiece(f, piece, poly, chunks[c]);
+          });
     });
     const PlainPieces pieces = bucketByBand(chunks, lo, hi);
     report.plainFullPieces += static_cast<int>(pieces.full.size());
@@ -154,16 +147,12 @@ void TexelOperators::Impl::assembleSeamFaces(const std::vector<int32_t>& seamFac
                                                         });
   const auto integrateChunk = tbb::make_filter<int, Chunk>(tbb::filter_mode::parallel, [&](int c) {
     Chunk chunk;
-    FaceClip clip;
     SeamScratch scratch;
-    for (int i = c * grain; i < std::min(faces, (c + 1) * grain); ++i) {
-      const int f = seamFaces[i];
-      basis.clipFace(f, clip);
-      for (const auto& piece : clip.pieces) {
-        const auto poly = clip.polygon(piece);
-        if (!basis.isPlain(f, poly)) addSeamPiece(f, piece, poly, chunk, scratch);
-      }
-    }
+    forEachPiece(
+        c * grain, std::min(faces, (c + 1) * grain), [&](int i) { return seamFaces[i]; },
+        [&](int f, const FacePiece& piece, std::span<const PieceVertex> poly) {
+          if (!basis.isPlain(f, poly)) addSeamPiece(f, piece, poly, chunk, scratch);
+        });
     return chunk;
   });
   const auto addInOrder =

@@ -117,19 +117,15 @@ void TexelOperators::Impl::integratePieces(const ProgressCallback& progress) {
   std::vector<Chunk> out(chunks);
   tbb::parallel_for(0, chunks, [&](int c) {
     Chunk& chunk = out[c];
-    FaceClip clip;
     SeamScratch scratch;
-    for (int f = c * grain; f < std::min(faces, (c + 1) * grain); ++f) {
-      basis.clipFace(f, clip);
-      chunk.unexpected += clip.unexpectedCrossings;
-      for (const auto& piece : clip.pieces) {
-        const auto poly = clip.polygon(piece);
-        if (basis.isPlain(f, poly))
-          addPlainPiece(f, piece, poly, chunk);
-        else
-          addSeamPiece(f, piece, poly, chunk, scratch);
-      }
-    }
+    chunk.unexpected += forEachPiece(
+        c * grain, std::min(faces, (c + 1) * grain), [](int f) { return f; },
+        [&](int f, const FacePiece& piece, std::span<const PieceVertex> poly) {
+          if (basis.isPlain(f, poly))
+            addPlainPiece(f, piece, poly, chunk);
+          else
+            addSeamPiece(f, piece, poly, chunk, scratch);
+        });
   });
   reportProgress(progress, "integrate pieces", 0.6);
   for (const Chunk& chunk : out) report.unexpectedCrossings += chunk.unexpected;

@@ -58,6 +58,20 @@ struct TexelOperators::Impl {
        const OperatorOptions& opts)
       : options(opts), basis(mesh, atlas, grid, {opts.basis}) {}
 
+  /// Clips each face faceAt(i), i in [first, last), in turn and calls visit(face, piece,
+  /// polygon) for each of its pieces; returns the clipping's unexpected crossings.
+  template <typename FaceAt, typename Visit>
+  int forEachPiece(int first, int last, FaceAt faceAt, Visit&& visit) const {
+    FaceClip clip;
+    int unexpected = 0;
+    for (int i = first; i < last; ++i) {
+      const int f = faceAt(i);
+      basis.clipFace(f, clip);
+      unexpected += clip.unexpectedCrossings;
+      for (const FacePiece& piece : clip.pieces) visit(f, piece, clip.polygon(piece));
+    }
+    return unexpected;
+  }
   /// Clips and integrates every piece, kept in `plain` (all bands) and `seam`.
   void integratePieces(const ProgressCallback& progress);
   /// Buffers of a seam piece's integration, reused from piece to piece by one task.
