@@ -111,7 +111,9 @@ void addFilterCommand(CLI::App& app) {
       "detail: on the shared test meshes at 1024x1024 the RMS jump is 0.0-0.7 times the input's "
       "at beta 0 and 1.98-2.10 times at beta 2. Sharpening thus amplifies the jumps the input "
       "has; run `texgrad seams` on the input or on the result to remove them (RMS jump then at "
-      "most 1.02 8-bit steps on those meshes).");
+      "most 1.02 8-bit steps on those meshes). The channels are solved one after another (less "
+      "memory): --cycles and --max-iterations apply to each channel, and the reported iterations "
+      "(--json's solve.iterations, the progress count) add up all channels'.");
   cmd->add_option("mesh", args->mesh, "Mesh file (.obj .ply .gltf .glb) or builtin:NAME")
       ->required();
   cmd->add_option("texture", args->texture,

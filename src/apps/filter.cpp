@@ -205,7 +205,8 @@ Image filteredImage(const TexelGrid& grid, Image input, Image decoded, bool norm
 /// The one-shot filter on `ops`; `owned`, if given, holds `ops` and is freed before set-up.
 /// Solves one channel at a time (solveEachChannel): the multigrid's level vectors and CG's work
 /// vectors hold one channel, not all; x0 exists a channel at a time, for the right-hand side
-/// and again as each channel's initial guess, so no n x k block lives through the set-up.
+/// and again as each channel's initial guess, so only the k right-hand sides (n x 1 each) live
+/// through the set-up.
 FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
                         std::unique_ptr<TexelOperators> owned, Image texture,
                         const FilterOptions& options, const ProgressCallback& progress) {

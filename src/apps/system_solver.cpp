@@ -162,7 +162,8 @@ struct SystemSolver::Impl {
   std::unique_ptr<MultigridSolver<double>> multigridDouble;
   CholmodSolver direct;
   MatrixCopy copy;
-  /// A of the last update while keepsMatrix(); empty otherwise (the multigrid holds A^0).
+  /// A of the last update while keepsMatrix(); empty otherwise (A is applied through the
+  /// multigrid's level-0 stencils, row sums and boundary rows).
   Eigen::SparseMatrix<double> a;
   Eigen::Index rows = 0;  ///< of A
   double initTime = 0.0, updateTime = 0.0;

@@ -43,6 +43,18 @@ struct PackedSymmetric {
   }
 };
 
+/// Throws UnsupportedError if the n columns' entry counts (counts[1..n]) sum past what M's int
+/// positions index (Eigen's default StorageIndex): about 2^31 entries, some 230M texels at ~9.4
+/// per column, which a 16384² atlas of high coverage reaches.
+void requireIndexableNonZeros(const int* counts, int n) {
+  int64_t total = 0;
+  for (int u = 1; u <= n; ++u) total += counts[u];
+  if (total > std::numeric_limits<int>::max())
+    throw UnsupportedError("the texel operators would have " + std::to_string(total) +
+                           " non-zeros (" + std::to_string(n) +
+                           " active texels), more than 32-bit positions index; process the "
+                           "atlas at a lower resolution");
+}
 
 }  // namespace
 
@@ -268,6 +280,7 @@ void TexelOperators::Impl::buildPattern(const std::vector<uint8_t>& cellCovered)
     outer[u + 1] = static_cast<int>(column.size());
   });
   outer[0] = 0;
+  requireIndexableNonZeros(outer, n);
   for (int u = 0; u < n; ++u) outer[u + 1] += outer[u];
   mass.resizeNonZeros(outer[n]);
   forEachColumn([&](int u, const std::vector<int32_t>& column) {

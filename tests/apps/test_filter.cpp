@@ -244,6 +244,8 @@ TEST(Filter, OneShotRunsGiveTheInteractiveFiltersImageBitForBit) {
   for (size_t c = 0; c < mapped.betaPerCell.size(); c += 2) mapped.betaPerCell[c] = 2.0;
   FilterOptions normals = uniform;
   normals.normalMap = true;
+  FilterOptions smoothing = uniform;  // beta 0: the one-shot filter forms no S x0
+  smoothing.beta = 0.0;
   // An 8-bit texture (as read from a file) is held as its levels through the one-shot solve.
   const Image levels = [&] {
     const auto dir = test::tempDir("filter_levels");
@@ -255,13 +257,15 @@ TEST(Filter, OneShotRunsGiveTheInteractiveFiltersImageBitForBit) {
     return read;
   }();
   ASSERT_TRUE(exactByteLevels(levels).has_value());
-  for (const auto& [options, input] : {std::pair{uniform, texture}, std::pair{mapped, texture},
-                                       std::pair{normals, texture}, std::pair{uniform, levels}}) {
+  for (const auto& [options, input] :
+       {std::pair{uniform, texture}, std::pair{mapped, texture}, std::pair{normals, texture},
+        std::pair{uniform, levels}, std::pair{smoothing, levels}}) {
     InteractiveFilter interactive(shared, input, options);
     interactive.solve();
     const Image expected = interactive.image();
-    const std::string what = "beta map " + std::to_string(!options.betaPerCell.empty()) +
-                             ", normal map " + std::to_string(options.normalMap) + ", 8-bit " +
+    const std::string what = "beta " + std::to_string(options.beta) + ", beta map " +
+                             std::to_string(!options.betaPerCell.empty()) + ", normal map " +
+                             std::to_string(options.normalMap) + ", 8-bit " +
                              std::to_string(input.format == PixelFormat::UInt8);
     EXPECT_EQ(differingValues(filterTexture(shared, input, options).image, expected), 0) << what;
     TexelDomain consumed(mesh, kSize, kSize);

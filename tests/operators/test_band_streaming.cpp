@@ -17,13 +17,20 @@
 namespace texgrad {
 namespace {
 
+/// True if n bytes at a and at b are the same (n may be 0: the pointers may then be null, as an
+/// empty matrix's are, which memcmp must not be given).
+bool sameBytes(const void* a, const void* b, size_t n) {
+  return n == 0 || std::memcmp(a, b, n) == 0;
+}
+
 /// Same index arrays and bit-identical values (memcmp: -0.0 is not 0.0 here).
 ::testing::AssertionResult identical(const SparseRefd& a, const SparseRefd& b) {
-  if (a.rows() != b.rows() || a.nonZeros() != b.nonZeros())
+  if (a.rows() != b.rows() || a.outerSize() != b.outerSize() || a.nonZeros() != b.nonZeros())
     return ::testing::AssertionFailure()
            << "sizes differ: " << a.nonZeros() << " / " << b.nonZeros();
-  if (std::memcmp(a.outerIndexPtr(), b.outerIndexPtr(), sizeof(int) * (a.outerSize() + 1)) != 0 ||
-      std::memcmp(a.innerIndexPtr(), b.innerIndexPtr(), sizeof(int) * a.nonZeros()) != 0)
+  const size_t outerBytes = a.outerSize() > 0 ? sizeof(int) * size_t(a.outerSize() + 1) : 0;
+  if (!sameBytes(a.outerIndexPtr(), b.outerIndexPtr(), outerBytes) ||
+      !sameBytes(a.innerIndexPtr(), b.innerIndexPtr(), sizeof(int) * size_t(a.nonZeros())))
     return ::testing::AssertionFailure() << "patterns differ";
   Eigen::Index differing = 0;
   for (Eigen::Index k = 0; k < a.nonZeros(); ++k)

@@ -192,6 +192,31 @@ TEST(Multigrid, HandedOverMatrixGivesTheSameCyclesAndIsFreedWithLevelZero) {
   }
 }
 
+TEST(Multigrid, HandedOverMatrixOfAOneLevelHierarchyIsFactorisedThenFreed) {
+  // With a single level the direct factorisation reads the handed-over A^0 before it is freed:
+  // the same cycles (an exact solve) and the same level-0 operator as with a view.
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  const Eigen::MatrixXd b = test::randomBlock(p.mass.rows(), 2, 11);
+  MultigridOptions o;
+  o.minCoarseUnknowns = static_cast<int>(p.mass.rows()) + 1;  // nothing to coarsen
+  MultigridSolver<float> viewed(o), handed(o);
+  const Eigen::SparseMatrix<double> a = p.system(1e2);
+  Eigen::SparseMatrix<double> given = a;
+  viewed.initAndUpdate(p.grid, a);
+  handed.initAndUpdate(p.grid, std::move(given));
+  EXPECT_EQ(given.nonZeros(), 0);
+  ASSERT_EQ(handed.levelInfo().size(), 1u);
+  MultigridSolver<float>::Matrix x1 = MultigridSolver<float>::Matrix::Zero(b.rows(), 2), x2 = x1;
+  viewed.cycle(b.cast<float>(), x1);
+  handed.cycle(b.cast<float>(), x2);
+  EXPECT_GT(x1.norm(), 0.0f);
+  EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0f);
+  MultigridSolver<float>::Matrix y1, y2;
+  viewed.applyOperator(x1, y1);
+  handed.applyOperator(x1, y2);
+  EXPECT_EQ((y1 - y2).cwiseAbs().maxCoeff(), 0.0f);
+}
+
 TEST(Multigrid, ChangingAlphaOnlyUpdates) {
   const test::SyntheticProblem p = test::multiChartProblem(12);
   MultigridSolver<float> mg;

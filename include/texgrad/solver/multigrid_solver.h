@@ -108,7 +108,8 @@ class MultigridSolver {
   /// NumericalError if a block is not positive definite.
   void update(const SparseSum& a);
   /// As update, but the solver takes a over (a is left empty) and frees it once level 0's data
-  /// and A^1 exist, before the coarser levels are built: same result, lower peak memory.
+  /// and A^1 exist (with one level, once it is factorised), before the coarser levels are built:
+  /// same result, lower peak memory.
   void update(Eigen::SparseMatrix<double>&& a);
   /// init(grid, a) then update(a) with one chain of Galerkin products instead of two (for
   /// one-shot solves; the result is identical).
