@@ -4,9 +4,7 @@
 #include "texgrad/apps/filter.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <numeric>
 #include <optional>
 #include <span>
 #include <utility>
@@ -41,9 +39,6 @@ BarelyCoveredNeighbours barelyBound(const TexelDomain& domain, const TexelOperat
   return barelyCoveredNeighbours(ops.mass(), barelyCoveredUnknowns(domain));
 }
 
-/// Values of an 8-bit channel.
-constexpr size_t kByteLevels = 256;
-
 /// The values the one-shot filter reads x0 from, a channel at a time: a float image, or an 8-bit
 /// texture held as its levels (exactByteLevels), each read as the float it decodes to. Either
 /// way the values of gatherTexels(grid, image), bit for bit.
@@ -52,25 +47,14 @@ class TexelValues {
   /// `image` (and `levels`, if given: then image's pixels may be empty) must outlive this.
   TexelValues(const TexelGrid& grid, const Image& image, const std::vector<uint8_t>* levels)
       : grid_(grid), image_(image), levels_(levels) {
-    if (image.width != grid.imageWidth || image.height != grid.imageHeight)
-      throw InvalidInputError("texture is " + std::to_string(image.width) + "x" +
-                              std::to_string(image.height) + " but the texel grid was built for " +
-                              std::to_string(grid.imageWidth) + "x" +
-                              std::to_string(grid.imageHeight));
-    if (levels) {
-      std::array<uint8_t, kByteLevels> all{};
-      std::iota(all.begin(), all.end(), uint8_t{0});
-      levelValues_ = valuesOfByteLevels(all);
-    }
+    requireGridImageSize(grid, image);
   }
   int channels() const { return image_.channels; }
   /// gatherTexels(grid, image)(u, c): the nearest image texel for active texels outside it.
   double operator()(int u, int c) const {
-    const int t = grid_.texelOfUnknown[static_cast<size_t>(u)];
-    const int i = std::clamp(t % grid_.nx + grid_.x0, 0, image_.width - 1);
-    const int j = std::clamp(t / grid_.nx + grid_.y0, 0, image_.height - 1);
+    const auto [i, j] = imageTexelOf(grid_, u);
     const size_t k = image_.index(i, j, c);
-    return levels_ ? levelValues_[(*levels_)[k]] : image_.pixels[k];
+    return levels_ ? byteLevelValues()[(*levels_)[k]] : image_.pixels[k];
   }
   /// Channel c at every unknown (unknowns x 1).
   Eigen::MatrixXd channel(int c) const {
@@ -91,7 +75,6 @@ class TexelValues {
   const TexelGrid& grid_;
   const Image& image_;
   const std::vector<uint8_t>* levels_;
-  std::vector<float> levelValues_;
 };
 
 /// alpha M x0 + S_beta x0, one n x 1 block per channel, with one channel of x0 and one product

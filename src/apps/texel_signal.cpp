@@ -8,17 +8,25 @@
 
 namespace texgrad {
 
-Eigen::MatrixXd gatherTexels(const TexelGrid& grid, const Image& image) {
+void requireGridImageSize(const TexelGrid& grid, const Image& image) {
   if (image.width != grid.imageWidth || image.height != grid.imageHeight)
     throw InvalidInputError("texture is " + std::to_string(image.width) + "x" +
                             std::to_string(image.height) + " but the texel grid was built for " +
                             std::to_string(grid.imageWidth) + "x" +
                             std::to_string(grid.imageHeight));
+}
+
+std::array<int, 2> imageTexelOf(const TexelGrid& grid, int u) {
+  const int t = grid.texelOfUnknown[static_cast<size_t>(u)];
+  return {std::clamp(t % grid.nx + grid.x0, 0, grid.imageWidth - 1),
+          std::clamp(t / grid.nx + grid.y0, 0, grid.imageHeight - 1)};
+}
+
+Eigen::MatrixXd gatherTexels(const TexelGrid& grid, const Image& image) {
+  requireGridImageSize(grid, image);
   Eigen::MatrixXd values(grid.unknownCount(), image.channels);
   for (int u = 0; u < grid.unknownCount(); ++u) {
-    const int t = grid.texelOfUnknown[u];
-    const int i = std::clamp(t % grid.nx + grid.x0, 0, image.width - 1);
-    const int j = std::clamp(t / grid.nx + grid.y0, 0, image.height - 1);
+    const auto [i, j] = imageTexelOf(grid, u);
     for (int c = 0; c < image.channels; ++c) values(u, c) = image.at(i, j, c);
   }
   return values;

@@ -6,35 +6,29 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace texgrad {
-namespace {
 
-/// Number of 8-bit levels; the top one is the value 1.
-constexpr int kLevels = 256;
-
-/// The float each level decodes to, by OpenImageIO's own conversion (level * (1 / 255.0f) in
-/// OpenImageIO 2.4, which is not always level / 255.0f).
-const std::array<float, kLevels>& levelValues() {
-  static const std::array<float, kLevels> values = [] {
-    std::array<uint8_t, kLevels> levels{};
+// OpenImageIO's own conversion: level * (1 / 255.0f) in OpenImageIO 2.4.
+const std::array<float, kByteLevels>& byteLevelValues() {
+  static const std::array<float, kByteLevels> values = [] {
+    std::array<uint8_t, kByteLevels> levels{};
     std::iota(levels.begin(), levels.end(), uint8_t{0});
-    std::array<float, kLevels> v{};
+    std::array<float, kByteLevels> v{};
     if (!OIIO::convert_pixel_values(OIIO::TypeDesc::UINT8, levels.data(), OIIO::TypeDesc::FLOAT,
-                                    v.data(), kLevels))
+                                    v.data(), kByteLevels))
       v.fill(std::numeric_limits<float>::quiet_NaN());  // no value then matches a level
     return v;
   }();
   return values;
 }
 
-}  // namespace
-
 std::optional<std::vector<uint8_t>> exactByteLevels(const Image& image) {
   if (image.format != PixelFormat::UInt8) return std::nullopt;
-  const std::array<float, kLevels>& values = levelValues();
-  constexpr float top = kLevels - 1;
+  const std::array<float, kByteLevels>& values = byteLevelValues();
+  constexpr float top = kByteLevels - 1;
   std::vector<uint8_t> levels(image.pixels.size());
   for (size_t k = 0; k < levels.size(); ++k) {
     const float v = image.pixels[k];
@@ -47,7 +41,7 @@ std::optional<std::vector<uint8_t>> exactByteLevels(const Image& image) {
 }
 
 std::vector<float> valuesOfByteLevels(std::span<const uint8_t> levels) {
-  const std::array<float, kLevels>& values = levelValues();
+  const std::array<float, kByteLevels>& values = byteLevelValues();
   std::vector<float> out(levels.size());
   for (size_t k = 0; k < levels.size(); ++k) out[k] = values[levels[k]];
   return out;

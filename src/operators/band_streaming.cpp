@@ -9,6 +9,8 @@
 #include <atomic>
 #include <cstdint>
 #include <limits>
+#include <span>
+#include <vector>
 
 #include "texel_operators_impl.h"
 
@@ -38,41 +40,41 @@ int windowStart(int k, int w) {
   return k == 0 ? 0 : k * w + 1;
 }
 
+/// The faces of each window, ascending (a face is in every window its plain pieces meet):
+/// window k holds faces[begin[k]] to faces[begin[k + 1] - 1].
+struct WindowFaces {
+  std::vector<int64_t> begin;
+  std::vector<int32_t> faces;
+};
+
+/// The windows' faces, for the bands first[f] to last[f] of each face f (none if last[f] < 0),
+/// w bands per window.
+WindowFaces windowFacesOf(std::span<const int32_t> first, std::span<const int32_t> last, int w,
+                          int windows) {
+  const auto faces = static_cast<int>(first.size());
+  auto forEachFaceWindow = [&](const auto& use) {
+    for (int f = 0; f < faces; ++f)
+      if (last[f] >= 0)
+        for (int k = windowOf(first[f], w); k <= windowOf(last[f], w); ++k) use(f, k);
+  };
+  WindowFaces out;
+  out.begin.assign(static_cast<size_t>(windows) + 1, 0);
+  forEachFaceWindow([&](int, int k) { ++out.begin[static_cast<size_t>(k) + 1]; });
+  for (int k = 0; k < windows; ++k) out.begin[k + 1] += out.begin[k];
+  out.faces.resize(static_cast<size_t>(out.begin.back()));
+  std::vector<int64_t> cursor(out.begin.begin(), out.begin.end() - 1);
+  forEachFaceWindow([&](int f, int k) { out.faces[cursor[k]++] = f; });
+  return out;
+}
+
 }  // namespace
 
 void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMetric,
                                             const ProgressCallback& progress) {
   const TexelGrid& grid = basis.grid();
-  const int faces = basis.faceCount();
-  const int grain = options.facesPerTask;
   bandCount = band(grid.ny - 1) + 1;
-  // First pass: the covered cells and the seam pieces' texels (M's pattern), and the bands of
-  // each face's plain pieces.
   std::vector<uint8_t> covered(grid.cellCount(), 0);
-  std::vector<int32_t> firstBand(static_cast<size_t>(faces), std::numeric_limits<int32_t>::max());
-  std::vector<int32_t> lastBand(static_cast<size_t>(faces), -1);
-  {
-    std::vector<Chunk> chunks(static_cast<size_t>((faces + grain - 1) / grain));
-    tbb::parallel_for(0, static_cast<int>(chunks.size()), [&](int c) {
-      Chunk& chunk = chunks[c];
-      SeamScratch scratch;
-      chunk.unexpected += forEachPiece(
-          c * grain, std::min(faces, (c + 1) * grain), [](int f) { return f; },
-          [&](int f, const FacePiece& piece, std::span<const PieceVertex> poly) {
-            // Faces of other tasks may share the cell: a relaxed atomic store of the same value.
-            std::atomic_ref<uint8_t>(covered[grid.cellIndex(piece.cellX, piece.cellY)])
-                .store(1, std::memory_order_relaxed);
-            if (basis.isPlain(f, poly)) {
-              firstBand[f] = std::min(firstBand[f], band(piece.cellY));
-              lastBand[f] = std::max(lastBand[f], band(piece.cellY));
-            } else {
-              addSeamPiece(f, piece, poly, chunk, scratch, false);
-            }
-          });
-    });
-    for (const Chunk& chunk : chunks) report.unexpectedCrossings += chunk.unexpected;
-    gatherSeamPieces(chunks);
-  }
+  FaceBands bands = scanFaces(covered);
   report.seamPieces = static_cast<int>(seam.size());
   reportProgress(progress, "integrate pieces", 0.6);
   buildPattern(covered);
@@ -88,49 +90,69 @@ void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMet
   metric = std::move(faceMetric);
   stiffnessValues.assign(static_cast<size_t>(mass.nonZeros()), 0.0);  // M's: zeros already
 
-  // The faces of each window, ascending (a face is in every window its plain pieces meet).
   const int w = windowBands(bandCount);
   const int windows = windowOf(bandCount - 1, w) + 1;
-  auto forEachFaceWindow = [&](const auto& use) {
-    for (int f = 0; f < faces; ++f)
-      if (lastBand[f] >= 0)
-        for (int k = windowOf(firstBand[f], w); k <= windowOf(lastBand[f], w); ++k) use(f, k);
-  };
-  std::vector<int64_t> windowBegin(static_cast<size_t>(windows) + 1, 0);
-  forEachFaceWindow([&](int, int k) { ++windowBegin[static_cast<size_t>(k) + 1]; });
-  for (int k = 0; k < windows; ++k) windowBegin[k + 1] += windowBegin[k];
-  std::vector<int32_t> windowFaces(static_cast<size_t>(windowBegin.back()));
-  std::vector<int64_t> cursor(windowBegin.begin(), windowBegin.end() - 1);
-  forEachFaceWindow([&](int f, int k) { windowFaces[cursor[k]++] = f; });
-  std::vector<int32_t>().swap(firstBand);
-  std::vector<int32_t>().swap(lastBand);
-  std::vector<int64_t>().swap(cursor);
-
-  // Each window: clip its faces, keep the plain pieces of its bands, assemble them, free them.
+  const WindowFaces windowFaces = windowFacesOf(bands.first, bands.last, w, windows);
+  bands = FaceBands();
   for (int k = 0; k < windows; ++k) {
-    const int lo = windowStart(k, w), hi = std::min(bandCount, windowStart(k + 1, w));
-    const int32_t* list = windowFaces.data() + windowBegin[k];
-    const auto count = static_cast<int>(windowBegin[k + 1] - windowBegin[k]);
-    std::vector<Chunk> chunks(static_cast<size_t>((count + grain - 1) / grain));
-    tbb::parallel_for(0, static_cast<int>(chunks.size()), [&](int c) {
-      // Unexpected crossings were counted in the first pass.
-      forEachPiece(
-          c * grain, std::min(count, (c + 1) * grain), [&](int i) { return list[i]; },
-          [&](int f, const FacePiece& piece, std::span<const PieceVertex> poly) {
-            const int b = band(piece.cellY);
-            if (b >= lo && b < hi && basis.isPlain(f, poly))
-              addPlainPiece(f, piece, poly, chunks[c]);
-          });
-    });
-    const PlainPieces pieces = bucketByBand(chunks, lo, hi);
-    report.plainFullPieces += static_cast<int>(pieces.full.size());
-    report.plainPartialPieces += static_cast<int>(pieces.partial.size());
-    assembleBands(pieces, factors, nullptr, mass.valuePtr(), stiffnessValues.data());
+    const auto begin = static_cast<size_t>(windowFaces.begin[k]);
+    const auto end = static_cast<size_t>(windowFaces.begin[k + 1]);
+    assembleWindow(std::span(windowFaces.faces).subspan(begin, end - begin), windowStart(k, w),
+                   std::min(bandCount, windowStart(k + 1, w)));
     reportProgress(progress, "assemble", 0.8 + 0.2 * (k + 1) / windows);
   }
   assembleSeamFaces(seamFaces);
   finishStiffness(stiffnessValues.data());
   buildSeamContinuity();
+}
+
+TexelOperators::Impl::FaceBands TexelOperators::Impl::scanFaces(std::vector<uint8_t>& covered) {
+  const TexelGrid& grid = basis.grid();
+  const int faces = basis.faceCount();
+  const int grain = options.facesPerTask;
+  FaceBands bands;
+  bands.first.assign(static_cast<size_t>(faces), std::numeric_limits<int32_t>::max());
+  bands.last.assign(static_cast<size_t>(faces), -1);
+  std::vector<Chunk> chunks(static_cast<size_t>((faces + grain - 1) / grain));
+  tbb::parallel_for(0, static_cast<int>(chunks.size()), [&](int c) {
+    Chunk& chunk = chunks[c];
+    SeamScratch scratch;
+    chunk.unexpected += forEachPiece(
+        c * grain, std::min(faces, (c + 1) * grain), [](int f) { return f; },
+        [&](int f, const FacePiece& piece, std::span<const PieceVertex> poly) {
+          // Faces of other tasks may share the cell: a relaxed atomic store of the same value.
+          std::atomic_ref<uint8_t>(covered[grid.cellIndex(piece.cellX, piece.cellY)])
+              .store(1, std::memory_order_relaxed);
+          if (basis.isPlain(f, poly)) {
+            bands.first[f] = std::min(bands.first[f], band(piece.cellY));
+            bands.last[f] = std::max(bands.last[f], band(piece.cellY));
+          } else {
+            addSeamPiece(f, piece, poly, chunk, scratch, false);
+          }
+        });
+  });
+  for (const Chunk& chunk : chunks) report.unexpectedCrossings += chunk.unexpected;
+  gatherSeamPieces(chunks);
+  return bands;
+}
+
+void TexelOperators::Impl::assembleWindow(std::span<const int32_t> faces, int lo, int hi) {
+  const int grain = options.facesPerTask;
+  const auto count = static_cast<int>(faces.size());
+  std::vector<Chunk> chunks(static_cast<size_t>((count + grain - 1) / grain));
+  tbb::parallel_for(0, static_cast<int>(chunks.size()), [&](int c) {
+    // Unexpected crossings were counted in scanFaces.
+    forEachPiece(
+        c * grain, std::min(count, (c + 1) * grain), [&](int i) { return faces[i]; },
+        [&](int f, const FacePiece& piece, std::span<const PieceVertex> poly) {
+          const int b = band(piece.cellY);
+          if (b >= lo && b < hi && basis.isPlain(f, poly)) addPlainPiece(f, piece, poly, chunks[c]);
+        });
+  });
+  const PlainPieces pieces = bucketByBand(chunks, lo, hi);
+  report.plainFullPieces += static_cast<int>(pieces.full.size());
+  report.plainPartialPieces += static_cast<int>(pieces.partial.size());
+  assembleBands(pieces, factors, nullptr, mass.valuePtr(), stiffnessValues.data());
 }
 
 void TexelOperators::Impl::assembleSeamFaces(const std::vector<int32_t>& seamFaces) {

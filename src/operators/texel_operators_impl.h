@@ -102,6 +102,15 @@ struct TexelOperators::Impl {
   /// face's bands, then windows of bands are clipped, integrated and assembled in turn
   /// (band_streaming.cpp). The same sums in the same order as assemble(): bit-identical.
   void assembleStreamed(std::vector<Eigen::Matrix2d> metric, const ProgressCallback& progress);
+  /// Bands each face's plain pieces meet, first[f] to last[f] (none if last[f] < 0).
+  struct FaceBands {
+    std::vector<int32_t> first, last;
+  };
+  /// assembleStreamed's first pass: clips every face, marks the covered cells in `covered`,
+  /// gathers the seam pieces (with their texels, not their integrals) and returns the bands.
+  FaceBands scanFaces(std::vector<uint8_t>& covered);
+  /// Clips `faces` again and adds their plain pieces in bands [lo, hi) into M and S.
+  void assembleWindow(std::span<const int32_t> faces, int lo, int hi);
   /// Clips the given faces (ascending) again, integrates their seam pieces and adds them into
   /// M and S in face order, a few chunks of faces in flight (band_streaming.cpp).
   void assembleSeamFaces(const std::vector<int32_t>& seamFaces);

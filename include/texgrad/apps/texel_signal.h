@@ -2,11 +2,19 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 
 #include "texgrad/atlas/texel_grid.h"
 #include "texgrad/io/image.h"
 
 namespace texgrad {
+
+/// Throws InvalidInputError unless `image` has the size the grid was built for.
+void requireGridImageSize(const TexelGrid& grid, const Image& image);
+
+/// Image texel (i, j) that unknown u takes its value from: its own, or for an active texel
+/// outside the image the nearest image texel (clamp-to-edge: what a renderer shows there).
+std::array<int, 2> imageTexelOf(const TexelGrid& grid, int u);
 
 /// Values of `image` at the grid's unknowns (unknownCount x channels). Active texels outside the
 /// image take the nearest image texel (clamp-to-edge: what a renderer shows there).

@@ -2,6 +2,7 @@
 // them: a one-shot filter keeps the input texture this way between gathering and writing back.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -10,6 +11,13 @@
 #include "texgrad/io/image.h"
 
 namespace texgrad {
+
+/// Number of 8-bit levels; the top one is the value 1.
+inline constexpr int kByteLevels = 256;
+
+/// The float each 8-bit level decodes to (readImage's own conversion, which is not always
+/// level / 255.0f).
+const std::array<float, kByteLevels>& byteLevelValues();
 
 /// The values of `image` as 8-bit levels (same order as Image::pixels) if its format is UInt8
 /// and every value is exactly what readImage decodes a level of an 8-bit file to (about
