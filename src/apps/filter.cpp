@@ -185,17 +185,18 @@ Image filteredImage(const TexelGrid& grid, Image input, Image decoded, bool norm
   return input;
 }
 
-/// The one-shot filter on `ops`; `owned`, if given, holds `ops` and is freed before set-up.
+/// The one-shot filter on `ops`; `owned`, if given, holds `ops` and is freed before set-up;
+/// `mapsOwner`, if given, is `domain`, whose grid maps are freed once nothing reads them.
 /// Solves one channel at a time (solveEachChannel): the multigrid's level vectors and CG's work
 /// vectors hold one channel, not all; x0 exists a channel at a time, for the right-hand side
 /// and again as each channel's initial guess, so only the k right-hand sides (n x 1 each) live
 /// through the set-up.
 FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
-                        std::unique_ptr<TexelOperators> owned, Image texture,
-                        const FilterOptions& options, const ProgressCallback& progress) {
+                        std::unique_ptr<TexelOperators> owned, TexelDomain* mapsOwner,
+                        Image texture, const FilterOptions& options,
+                        const ProgressCallback& progress) {
   options.validate();
   checkBetaMap(domain, options.betaPerCell);
-  std::optional<SystemSolver> solver(std::in_place, domain.grid(), options.solver);
   Image decoded = options.normalMap ? decodeNormalMap(texture) : Image();
   // Until the result is written, an 8-bit texture is held as its levels: 1 byte per value
   // instead of a float (38 MB less from here to the write-back at spot 2048²).
@@ -204,9 +205,17 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
   const TexelValues x0 = options.normalMap
                              ? TexelValues(domain.grid(), decoded, nullptr)
                              : TexelValues(domain.grid(), texture, levels ? &*levels : nullptr);
+  // Built once the texture is held as its levels: the hierarchy is the solver's only read of
+  // the grid's maps.
+  std::optional<SystemSolver> solver(std::in_place, domain.grid(), options.solver);
   const BarelyCoveredNeighbours barely = barelyBound(domain, ops, options);
   const Eigen::MatrixXd barelyX0 = x0.rows(barely.unknowns);
+  // The grid's maps go once nothing reads them: now, or with a beta map once the right-hand
+  // side is formed (modulatedStiffness integrates the pieces of every cell again).
+  const bool mapped = !options.betaPerCell.empty();
+  if (mapsOwner && !mapped) mapsOwner->releaseImageMaps();
   std::vector<Eigen::MatrixXd> rhs = screenedRightHandSide(ops, x0, options);
+  if (mapsOwner && mapped) mapsOwner->releaseImageMaps();
   // From here on only A is needed: formed in M's storage when the operators are ours, which
   // frees S with them (`ops` is not used again).
   Eigen::SparseMatrix<double> system =
@@ -320,10 +329,11 @@ Image InteractiveFilter::image() const {
 
 FilterResult filterTexture(const TexelDomain& domain, Image texture, const FilterOptions& options,
                            const ProgressCallback& progress) {
-  return filterOnce(domain, domain.operators(), nullptr, std::move(texture), options, progress);
+  return filterOnce(domain, domain.operators(), nullptr, nullptr, std::move(texture), options,
+                    progress);
 }
 
-FilterResult filterTexture(const TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
                            Image texture, const FilterOptions& options,
                            const ProgressCallback& progress) {
   if (!operators || operators->mass().rows() != domain.unknowns())
@@ -331,7 +341,9 @@ FilterResult filterTexture(const TexelDomain& domain, std::unique_ptr<TexelOpera
         "filterTexture: the operators handed over are not the domain's "
         "(TexelDomain::releaseOperators)");
   const TexelOperators& ops = *operators;
-  return filterOnce(domain, ops, std::move(operators), std::move(texture), options, progress);
+  TexelDomain* mapsOwner = domain.hasOperators() ? nullptr : &domain;
+  return filterOnce(domain, ops, std::move(operators), mapsOwner, std::move(texture), options,
+                    progress);
 }
 
 }  // namespace texgrad

@@ -156,7 +156,6 @@ void SolverSettings::validate() const {
 }
 
 struct SystemSolver::Impl {
-  const TexelGrid& grid;
   SolverSettings settings;
   std::unique_ptr<MultigridSolver<float>> multigridFloat;
   std::unique_ptr<MultigridSolver<double>> multigridDouble;
@@ -167,15 +166,17 @@ struct SystemSolver::Impl {
   Eigen::SparseMatrix<double> a;
   Eigen::Index rows = 0;  ///< of A
   double initTime = 0.0, updateTime = 0.0;
+  double hierarchyTime = 0.0;  ///< of the build in the constructor, counted by the first init
+  int unknowns = 0;            ///< of the grid (summary)
   tbb::task_arena arena;
   /// Refinement state: residual r = b - A x, correction z, and the b and x r belongs to.
   Eigen::MatrixXd r, z, lastX, lastB;
   bool cacheValid = false;
 
-  Impl(const TexelGrid& g, const SolverSettings& s, MatrixCopy c)
-      : grid(g),
-        settings(s),
+  Impl(const TexelGrid& grid, const SolverSettings& s, MatrixCopy c)
+      : settings(s),
         copy(c),
+        unknowns(grid.unknownCount()),
         arena(s.multigrid.threads > 0 ? s.multigrid.threads : tbb::task_arena::automatic) {
     settings.validate();
     if (settings.kind == SolverKind::Direct) return;
@@ -183,6 +184,19 @@ struct SystemSolver::Impl {
       multigridFloat = std::make_unique<MultigridSolver<float>>(settings.multigrid);
     else
       multigridDouble = std::make_unique<MultigridSolver<double>>(settings.multigrid);
+    // The grid is read here only: a one-shot caller may free its per-texel maps once the
+    // hierarchy exists (TexelDomain::releaseImageMaps).
+    const auto start = std::chrono::steady_clock::now();
+    if (multigridFloat) multigridFloat->buildHierarchy(grid);
+    if (multigridDouble) multigridDouble->buildHierarchy(grid);
+    hierarchyTime = secondsSince(start);
+  }
+
+  /// Seconds since `start` plus the hierarchy build not yet counted by an init.
+  double initSecondsSince(std::chrono::steady_clock::time_point start) {
+    const double seconds = secondsSince(start) + hierarchyTime;
+    hierarchyTime = 0.0;
+    return seconds;
   }
 
   /// True while the solves need A itself, or the caller asked for it (MatrixCopy).
@@ -292,7 +306,8 @@ struct SystemSolver::Impl {
   /// Replaces the float cycles by double cycles on the current A, for good.
   void useDoubleCycles() {
     multigridDouble = std::make_unique<MultigridSolver<double>>(settings.multigrid);
-    multigridDouble->initAndUpdate(grid, a);
+    multigridDouble->setHierarchy(multigridFloat->hierarchy());
+    multigridDouble->initAndUpdate(a);
     multigridFloat.reset();
     settings.singlePrecision = false;
   }
@@ -393,15 +408,15 @@ void SystemSolver::init(const Eigen::SparseMatrix<double>& pattern) {
     impl_->visitMultigrid([&](auto& solver) {
       // The multigrid set-up reads compressed matrices only (SparseSum); update() compresses too.
       if (pattern.isCompressed()) {
-        solver.init(impl_->grid, pattern);
+        solver.analyzePattern(pattern);
       } else {
         Eigen::SparseMatrix<double> compressed = pattern;
         compressed.makeCompressed();
-        solver.init(impl_->grid, compressed);
+        solver.analyzePattern(compressed);
       }
       return 0;
     });
-  impl_->initTime = secondsSince(start);
+  impl_->initTime = impl_->initSecondsSince(start);
 }
 
 void SystemSolver::update(const Eigen::SparseMatrix<double>& a, const ProgressCallback& progress) {
@@ -443,10 +458,10 @@ void SystemSolver::initAndUpdate(Eigen::SparseMatrix<double>&& a,
   const auto start = std::chrono::steady_clock::now();
   impl_->adoptMatrix(a, [&](Eigen::SparseMatrix<double>& adopted) {
     impl_->setUpMultigrid(adopted, [&](auto& solver, auto&& matrix) {
-      solver.initAndUpdate(impl_->grid, std::forward<decltype(matrix)>(matrix));
+      solver.initAndUpdate(std::forward<decltype(matrix)>(matrix));
     });
   });
-  impl_->initTime = secondsSince(start);
+  impl_->initTime = impl_->initSecondsSince(start);
   impl_->updateTime = 0.0;
   reportProgress(progress, kSetupStage, 1.0);
 }
@@ -510,7 +525,7 @@ int64_t SystemSolver::storageBytes() const {
 
 std::string SystemSolver::summary() const {
   if (impl_->settings.kind == SolverKind::Direct)
-    return "direct solver (CHOLMOD), " + std::to_string(impl_->grid.unknownCount()) + " unknowns";
+    return "direct solver (CHOLMOD), " + std::to_string(impl_->unknowns) + " unknowns";
   return impl_->visitMultigrid([](auto& solver) { return solver.summary(); });
 }
 

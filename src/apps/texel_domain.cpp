@@ -34,4 +34,18 @@ std::unique_ptr<TexelOperators> TexelDomain::releaseOperators() {
   return std::move(operators_);
 }
 
+void TexelDomain::releaseImageMaps() {
+  if (operators_)
+    throw InvalidInputError(
+        "TexelDomain::releaseImageMaps: the domain still holds its operators; hand them over "
+        "(releaseOperators) first");
+  std::vector<TexelClass>().swap(grid_.texelClass);
+  std::vector<int32_t>().swap(grid_.texelChart);
+  std::vector<int32_t>().swap(grid_.unknownOfTexel);
+  std::vector<int32_t>().swap(grid_.multiChartTexels);
+  std::vector<CellCoverage>().swap(grid_.cellCoverage);
+  std::vector<int32_t>().swap(grid_.cellChart);
+  std::vector<int32_t>().swap(grid_.overlapCells);
+}
+
 }  // namespace texgrad

@@ -293,6 +293,14 @@ struct MultigridSolver<Scalar>::Impl {
                       });
   }
 
+  /// Throws InvalidInputError naming `caller` unless a hierarchy was built or set.
+  void requireHierarchy(const char* caller) const {
+    if (hierarchy.levelCount() == 0)
+      throw InvalidInputError(std::string("MultigridSolver::") + caller +
+                              ": no hierarchy; call init(grid, pattern) or buildHierarchy(grid) "
+                              "first");
+  }
+
   void buildHierarchy(const TexelGrid& grid) {
     const auto start = Clock::now();
     hierarchy = GridHierarchy::build(grid, options.levels, options.minCoarseUnknowns);
@@ -529,30 +537,46 @@ MultigridSolver<Scalar>& MultigridSolver<Scalar>::operator=(MultigridSolver&&) n
 
 template <typename Scalar>
 void MultigridSolver<Scalar>::init(const TexelGrid& grid, const SparseSum& pattern) {
-  impl_->arena.execute([&] {
-    impl_->buildHierarchy(grid);
-    impl_->symbolic(pattern, false);
-  });
+  buildHierarchy(grid);
+  impl_->arena.execute([&] { impl_->symbolic(pattern, false); });
 }
 
 template <typename Scalar>
 void MultigridSolver<Scalar>::initAndUpdate(const TexelGrid& grid, const SparseSum& a) {
-  impl_->arena.execute([&] {
-    impl_->buildHierarchy(grid);
-    impl_->symbolic(a, true);
-  });
+  buildHierarchy(grid);
+  initAndUpdate(a);
 }
 
 template <typename Scalar>
 void MultigridSolver<Scalar>::initAndUpdate(const TexelGrid& grid,
                                             Eigen::SparseMatrix<double>&& a) {
+  buildHierarchy(grid);
+  initAndUpdate(std::move(a));
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::buildHierarchy(const TexelGrid& grid) {
+  impl_->arena.execute([&] { impl_->buildHierarchy(grid); });
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::setHierarchy(GridHierarchy hierarchy) {
+  impl_->hierarchy = std::move(hierarchy);
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::initAndUpdate(const SparseSum& a) {
+  impl_->requireHierarchy("initAndUpdate");
+  impl_->arena.execute([&] { impl_->symbolic(a, true); });
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::initAndUpdate(Eigen::SparseMatrix<double>&& a) {
+  impl_->requireHierarchy("initAndUpdate");
   Eigen::SparseMatrix<double> owned;  // swapped: Eigen 3.4's SparseMatrix cannot be moved
   owned.swap(a);
   const SparseSum view(owned);  // throws (a already empty) if `owned` is not compressed
-  impl_->arena.execute([&] {
-    impl_->buildHierarchy(grid);
-    impl_->symbolic(view, true, &owned);
-  });
+  impl_->arena.execute([&] { impl_->symbolic(view, true, &owned); });
 }
 
 template <typename Scalar>
@@ -683,8 +707,7 @@ void MultigridSolver<Scalar>::applyOperator(const Matrix& x, Matrix& y) const {
 template <typename Scalar>
 MultigridSolver<Scalar>& MultigridSolver<Scalar>::analyzePattern(
     const Eigen::SparseMatrix<double>& a) {
-  if (impl_->hierarchy.levelCount() == 0)
-    throw InvalidInputError("MultigridSolver::analyzePattern: call init(grid, pattern) first");
+  impl_->requireHierarchy("analyzePattern");
   impl_->arena.execute([&] { impl_->symbolic(a, false); });
   return *this;
 }

@@ -75,8 +75,11 @@ FilterResult filterTexture(const TexelDomain& domain, Image texture, const Filte
 /// As above, for a caller done with the operators: `operators` (the domain's, handed over by
 /// TexelDomain::releaseOperators) are freed once the right-hand side and the system matrix
 /// alpha M + S are formed, before the solver's set-up, so M, S and C (~190 bytes per active
-/// texel) are not held through set-up and solve. Same result, bit for bit.
-FilterResult filterTexture(const TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+/// texel) are not held through set-up and solve. If the domain no longer holds operators, the
+/// grid's per-texel maps go too, once the solver's hierarchy exists
+/// (TexelDomain::releaseImageMaps: ~28 bytes per active texel at half coverage). Same result,
+/// bit for bit.
+FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
                            Image texture, const FilterOptions& options,
                            const ProgressCallback& progress = {});
 

@@ -76,7 +76,8 @@ enum class MatrixCopy {
 /// Solves A X = B repeatedly for one texel grid and one sparsity pattern of A.
 class SystemSolver {
  public:
-  /// Keeps a reference to `grid`, which must outlive the solver.
+  /// Reads `grid` here only (the multigrid kinds build their level hierarchy from it, timed as
+  /// part of the first init): the grid may change or go afterwards.
   SystemSolver(const TexelGrid& grid, const SolverSettings& settings,
                MatrixCopy copy = MatrixCopy::WhenNeeded);
   ~SystemSolver();

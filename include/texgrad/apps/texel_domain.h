@@ -36,6 +36,14 @@ class TexelDomain {
   std::unique_ptr<TexelOperators> releaseOperators();
   /// False once releaseOperators() has handed the operators over.
   bool hasOperators() const { return operators_ != nullptr; }
+  /// Frees the grid's per-texel and per-cell maps (texelClass, texelChart, unknownOfTexel,
+  /// multiChartTexels, cellCoverage, cellChart, overlapCells: about 14 bytes per image texel),
+  /// keeping its size, placement and texelOfUnknown, for a one-shot caller once nothing reads
+  /// them: filterTexture's consuming overload frees them once its solver's hierarchy exists.
+  /// Throws InvalidInputError while the domain holds its operators (they were built from them).
+  void releaseImageMaps();
+  /// False once releaseImageMaps() has freed the grid's maps.
+  bool hasImageMaps() const { return !grid_.texelClass.empty(); }
   /// Number of unknowns (active texels).
   int unknowns() const { return grid_.unknownCount(); }
 

@@ -116,6 +116,16 @@ class MultigridSolver {
   void initAndUpdate(const TexelGrid& grid, const SparseSum& a);
   /// As initAndUpdate, but the solver takes a over and frees it as update(a&&) does.
   void initAndUpdate(const TexelGrid& grid, Eigen::SparseMatrix<double>&& a);
+  /// Builds the hierarchy for `grid` now, init's first step, so that the grid is not read again:
+  /// the grid-free initAndUpdate and analyzePattern then use it.
+  void buildHierarchy(const TexelGrid& grid);
+  /// Uses `hierarchy`, built for the same grid (another solver's hierarchy()), as buildHierarchy.
+  void setHierarchy(GridHierarchy hierarchy);
+  /// initAndUpdate(grid, a) on the hierarchy already built (buildHierarchy, setHierarchy or an
+  /// earlier init); throws InvalidInputError if there is none.
+  void initAndUpdate(const SparseSum& a);
+  /// initAndUpdate(grid, a&&) on the hierarchy already built, as initAndUpdate(a).
+  void initAndUpdate(Eigen::SparseMatrix<double>&& a);
   /// One V-cycle (Fig. 8) improving x in place for right-hand side b (both n x k).
   void cycle(const Matrix& b, Matrix& x);
   /// V-cycles from the initial guess x until control is met; residual and change per cycle.
@@ -139,7 +149,8 @@ class MultigridSolver {
   /// then perturb only the differences (relative ~6e-8), not the row sums (the screening term).
   void applyOperator(const Matrix& x, Matrix& y) const;
 
-  /// Eigen preconditioner shape: re-runs init's symbolic phase for a new pattern (same grid).
+  /// Eigen preconditioner shape: re-runs init's symbolic phase for a new pattern (same grid, or
+  /// the hierarchy of buildHierarchy or setHierarchy).
   MultigridSolver& analyzePattern(const Eigen::SparseMatrix<double>& a);
   /// Eigen preconditioner shape: update(a).
   MultigridSolver& factorize(const Eigen::SparseMatrix<double>& a);
