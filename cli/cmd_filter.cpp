@@ -58,20 +58,20 @@ void runFilter(FilterArgs args) {
   std::optional<std::vector<uint8_t>> levels = exactByteLevels(paged.image);
   if (levels) paged.image.pixels = std::vector<float>();
   TexelDomain domain(std::move(paged.mesh), width, height, operatorOptions, progress);
-  if (levels) {
-    paged.image.pixels = valuesOfByteLevels(*levels);
-    levels.reset();
-  }
   timer.lap("operators");
   if (!args.betaMap.empty()) {
     const Image map = readImage(args.betaMap);
     args.options.betaPerCell =
         cellValuesFromMap(domain.grid(), map, args.betaRange[0], args.betaRange[1]);
   }
-  // One run, one filter: the filter takes the texture (and writes its result there) and frees
-  // the operators once its solver has what it needs (docs/memory.md).
-  const FilterResult result = filterTexture(domain, domain.releaseOperators(),
-                                            std::move(paged.image), args.options, progress);
+  // One run, one filter: the filter takes the texture, still as its levels if 8-bit (and writes
+  // its result there), and frees the operators and the grid's maps once it no longer needs
+  // them (docs/memory.md).
+  const FilterResult result =
+      levels ? filterTexture(domain, domain.releaseOperators(), std::move(paged.image),
+                             std::move(*levels), args.options, progress)
+             : filterTexture(domain, domain.releaseOperators(), std::move(paged.image),
+                             args.options, progress);
   timer.lap("solve");
   const PixelFormat stored = runStage(progress, "write", [&] {
     return writePagedTexture(args.out, domain.mesh(), paged.layout, result.image, args.bitDepth,

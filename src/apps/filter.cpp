@@ -193,14 +193,15 @@ Image filteredImage(const TexelGrid& grid, Image input, Image decoded, bool norm
 /// through the set-up.
 FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
                         std::unique_ptr<TexelOperators> owned, TexelDomain* mapsOwner,
-                        Image texture, const FilterOptions& options,
-                        const ProgressCallback& progress) {
+                        Image texture, std::optional<std::vector<uint8_t>> levels,
+                        const FilterOptions& options, const ProgressCallback& progress) {
   options.validate();
   checkBetaMap(domain, options.betaPerCell);
+  if (levels && options.normalMap) texture.pixels = valuesOfByteLevels(*levels);
   Image decoded = options.normalMap ? decodeNormalMap(texture) : Image();
   // Until the result is written, an 8-bit texture is held as its levels: 1 byte per value
   // instead of a float (38 MB less from here to the write-back at spot 2048²).
-  std::optional<std::vector<uint8_t>> levels = exactByteLevels(texture);
+  if (!levels) levels = exactByteLevels(texture);
   if (levels) texture.pixels = std::vector<float>();
   const TexelValues x0 = options.normalMap
                              ? TexelValues(domain.grid(), decoded, nullptr)
@@ -329,21 +330,47 @@ Image InteractiveFilter::image() const {
 
 FilterResult filterTexture(const TexelDomain& domain, Image texture, const FilterOptions& options,
                            const ProgressCallback& progress) {
-  return filterOnce(domain, domain.operators(), nullptr, nullptr, std::move(texture), options,
-                    progress);
+  return filterOnce(domain, domain.operators(), nullptr, nullptr, std::move(texture), std::nullopt,
+                    options, progress);
 }
 
-FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
-                           Image texture, const FilterOptions& options,
-                           const ProgressCallback& progress) {
+namespace {
+
+/// The operators handed to filterTexture, or InvalidInputError if they are not the domain's.
+const TexelOperators& requireDomainsOperators(const TexelDomain& domain,
+                                              const std::unique_ptr<TexelOperators>& operators) {
   if (!operators || operators->mass().rows() != domain.unknowns())
     throw InvalidInputError(
         "filterTexture: the operators handed over are not the domain's "
         "(TexelDomain::releaseOperators)");
-  const TexelOperators& ops = *operators;
+  return *operators;
+}
+
+}  // namespace
+
+FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+                           Image texture, const FilterOptions& options,
+                           const ProgressCallback& progress) {
+  const TexelOperators& ops = requireDomainsOperators(domain, operators);
   TexelDomain* mapsOwner = domain.hasOperators() ? nullptr : &domain;
-  return filterOnce(domain, ops, std::move(operators), mapsOwner, std::move(texture), options,
-                    progress);
+  return filterOnce(domain, ops, std::move(operators), mapsOwner, std::move(texture), std::nullopt,
+                    options, progress);
+}
+
+FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+                           Image texture, std::vector<uint8_t> levels, const FilterOptions& options,
+                           const ProgressCallback& progress) {
+  const TexelOperators& ops = requireDomainsOperators(domain, operators);
+  const size_t values = static_cast<size_t>(texture.width) * static_cast<size_t>(texture.height) *
+                        static_cast<size_t>(texture.channels);
+  if (texture.format != PixelFormat::UInt8 || levels.size() != values)
+    throw InvalidInputError("filterTexture: the levels handed over are not those of an 8-bit " +
+                            std::to_string(texture.width) + "x" + std::to_string(texture.height) +
+                            "x" + std::to_string(texture.channels) + " texture (exactByteLevels)");
+  texture.pixels = std::vector<float>();
+  TexelDomain* mapsOwner = domain.hasOperators() ? nullptr : &domain;
+  return filterOnce(domain, ops, std::move(operators), mapsOwner, std::move(texture),
+                    std::move(levels), options, progress);
 }
 
 }  // namespace texgrad

@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <memory>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "app_fixtures.h"
 #include "shared_meshes.h"
@@ -259,7 +262,7 @@ TEST(Filter, OneShotRunsGiveTheInteractiveFiltersImageBitForBit) {
   ASSERT_TRUE(exactByteLevels(levels).has_value());
   for (const auto& [options, input] :
        {std::pair{uniform, texture}, std::pair{mapped, texture}, std::pair{normals, texture},
-        std::pair{uniform, levels}, std::pair{smoothing, levels}}) {
+        std::pair{uniform, levels}, std::pair{smoothing, levels}, std::pair{normals, levels}}) {
     InteractiveFilter interactive(shared, input, options);
     interactive.solve();
     const Image expected = interactive.image();
@@ -275,7 +278,32 @@ TEST(Filter, OneShotRunsGiveTheInteractiveFiltersImageBitForBit) {
     EXPECT_FALSE(consumed.hasOperators());
     EXPECT_FALSE(consumed.hasImageMaps()) << what;
     EXPECT_EQ(consumed.grid().texelOfUnknown, shared.grid().texelOfUnknown) << "it stays";
+    if (std::optional<std::vector<uint8_t>> held = exactByteLevels(input)) {
+      TexelDomain byLevels(mesh, kSize, kSize);
+      Image withoutPixels = input;
+      withoutPixels.pixels = std::vector<float>();
+      const FilterResult r = filterTexture(byLevels, byLevels.releaseOperators(),
+                                           std::move(withoutPixels), std::move(*held), options);
+      EXPECT_EQ(differingValues(r.image, expected), 0) << what << ", handed over as levels";
+    }
   }
+}
+
+TEST(Filter, LevelsHandedOverMustBeThoseOfAn8BitTexture) {
+  Image texture(96, 64, 3, PixelFormat::UInt8);
+  const auto refused = [&](const Image& image, size_t values) {
+    TexelDomain domain(procedural::cube(3), 96, 64);
+    try {
+      filterTexture(domain, domain.releaseOperators(), image, std::vector<uint8_t>(values),
+                    withSolver(SolverKind::Direct, 0.0));
+    } catch (const InvalidInputError& e) {
+      return std::string(e.what()).find("levels handed over") != std::string::npos;
+    }
+    return false;
+  };
+  EXPECT_TRUE(refused(texture, texture.pixels.size() - 1));
+  texture.format = PixelFormat::Float;
+  EXPECT_TRUE(refused(texture, texture.pixels.size()));
 }
 
 /// How much larger the channel-by-channel solve's error to the direct solution may be than the

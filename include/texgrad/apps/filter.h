@@ -83,6 +83,15 @@ FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> 
                            Image texture, const FilterOptions& options,
                            const ProgressCallback& progress = {});
 
+/// As above, for an 8-bit texture held as its levels: `levels` is exactByteLevels(texture), whose
+/// pixels are not read (a caller that held the texture so while the operators were built hands
+/// it over as it is: no float copy at the operators' peak). Throws InvalidInputError if texture
+/// is not UInt8 or `levels` does not hold one value per texel and channel. Same result, bit for
+/// bit.
+FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+                           Image texture, std::vector<uint8_t> levels, const FilterOptions& options,
+                           const ProgressCallback& progress = {});
+
 /// The filter as a stateful solver for interactive use: change alpha / beta map, then step.
 class InteractiveFilter {
  public:
