@@ -119,4 +119,16 @@ template <typename T>
 void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSystem& system,
                     std::vector<T>& stencils);
 
+/// Pᵀ A^l P for the bilinear prolongation P from `fine` to `coarse`, with the rows of A^l read from
+/// the fine level's assigned data instead of a matrix: an interior row is its stencil at all 9
+/// lattice neighbours (values as stored in T; an entry A^l lacks is a zero coefficient), a
+/// boundary row is its boundaryRows entry. Equals galerkinProduct(A^l, fine, coarse) in pattern
+/// when every row of A^l stores its diagonal (galerkin.cpp says why), and in value up to the
+/// rounding of the stencils to T and the order of the sums. Defined in galerkin.cpp: one
+/// product kernel.
+template <typename T>
+Eigen::SparseMatrix<double> galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
+                                              const std::vector<T>& stencils,
+                                              const GridLevel& coarse);
+
 }  // namespace texgrad::detail
