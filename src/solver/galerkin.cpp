@@ -206,8 +206,10 @@ namespace detail {
 // diagonal entry already gives (J, K). The extra entries carry zeros, which add nothing.
 template <typename T>
 Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
-                         const std::vector<T>& stencils, const GridLevel& coarse) {
+                         const std::vector<T>& stencils, const std::vector<T>& rowSums,
+                         const GridLevel& coarse) {
   if (stencils.size() != static_cast<size_t>(system.stencilSize) ||
+      rowSums.size() != static_cast<size_t>(fine.slotCount) ||
       system.boundaryRows.ptr.size() != static_cast<size_t>(system.boundaryCount()) + 1)
     throw InvalidInputError("Galerkin product: level data not assigned");
   const auto unknownOf = [&](int64_t slot) {
@@ -225,10 +227,15 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
       const int q = static_cast<int>((s - run.begin) & 1);
       const int64_t n = run.runLength(q), i = (s - run.begin) / 2;
       const T* w = stencils.data() + run.coeffsOf(q);
+      double off = 0.0;
       for (int k = 0; k < 9; ++k) {  // stencil index k = (dy + 1) * 3 + (dx + 1)
         const int v = unknownOf(s + (k / 3 - 1) * int64_t(run.width) + (k % 3 - 1));
-        if (v >= 0) f(v, static_cast<double>(w[k * n + i]));  // (A has no entry at an empty slot)
+        if (k == 4 || v < 0) continue;  // (A has no entry at an empty slot)
+        const double value = static_cast<double>(w[k * n + i]);
+        off += value;
+        f(v, value);
       }
+      f(r, static_cast<double>(rowSums[static_cast<size_t>(s)]) - off);
       return;
     }
     // Boundary indices grow with the unknown index (classifyLevel): find r's by bisection.
@@ -238,16 +245,28 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
                          [&](int32_t slot, int v) { return unknownOf(slot) < v; }) -
         slots.begin());
     const SlotCsr& rows = system.boundaryRows;
-    for (int64_t e = rows.ptr[j]; e != rows.ptr[j + 1]; ++e)
-      f(unknownOf(rows.col[static_cast<size_t>(e)]), rows.val[static_cast<size_t>(e)]);
+    const int64_t offEnd = system.offBlockEnd[j];
+    double rounding = 0.0;  // of the couplings to interior texels, which their stencils hold in T
+    for (int64_t e = rows.ptr[j]; e != offEnd; ++e) {
+      const double exact = rows.val[static_cast<size_t>(e)];
+      const double value = static_cast<double>(static_cast<T>(exact));
+      rounding += exact - value;
+      f(unknownOf(rows.col[static_cast<size_t>(e)]), value);
+    }
+    for (int64_t e = offEnd; e != rows.ptr[j + 1]; ++e) {
+      const int v = unknownOf(rows.col[static_cast<size_t>(e)]);
+      f(v, rows.val[static_cast<size_t>(e)] + (v == r ? rounding : 0.0));
+    }
   };
   return latticeProduct(fine, coarse, rowOf);
 }
 
 template Sparse galerkinFromLevel<float>(const GridLevel&, const LevelSystem&,
-                                         const std::vector<float>&, const GridLevel&);
+                                         const std::vector<float>&, const std::vector<float>&,
+                                         const GridLevel&);
 template Sparse galerkinFromLevel<double>(const GridLevel&, const LevelSystem&,
-                                          const std::vector<double>&, const GridLevel&);
+                                          const std::vector<double>&, const std::vector<double>&,
+                                          const GridLevel&);
 
 }  // namespace detail
 }  // namespace texgrad

@@ -178,7 +178,7 @@ struct MultigridSolver<Scalar>::Impl {
   std::vector<Level> levels;
   std::vector<int64_t> nonZeros;  // per level, of A^l
   std::vector<int64_t> heldMatrixBytes;  // per level (MultigridLevelInfo::setUpMatrixBytes)
-  std::vector<T> rowSums;         // per slot of level 0: sum of A^0's row (applyOperator)
+  std::vector<T> rowSums;  // per slot of level 0: sum of A^0's row (applyOperator, A^1's set-up)
   CholmodSolver coarseSolver;
   Eigen::MatrixXd coarseWork;
   MultigridStats stats;
@@ -278,7 +278,7 @@ struct MultigridSolver<Scalar>::Impl {
       if (l == 0 && handedOver) Eigen::SparseMatrix<double>().swap(*handedOver);  // A^0
       if (fromLevelData) {
         Eigen::SparseMatrix<double> formed =
-            detail::galerkinFromLevel(grid, lv.sys, lv.stencil, hierarchy.level(l + 1));
+            detail::galerkinFromLevel(grid, lv.sys, lv.stencil, rowSums, hierarchy.level(l + 1));
         next.swap(formed);
       }
       heldMatrixBytes[sl] +=

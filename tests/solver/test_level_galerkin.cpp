@@ -18,6 +18,9 @@ using namespace texgrad;
 
 namespace {
 
+/// Bound on double rounding in a sum, relative to the sum of the magnitudes of its terms.
+constexpr double kSumRounding = 1e-14;
+
 /// A^0 with the couplings between footprint-interior diagonal neighbours (u, v) removed where
 /// (u + v) % 3 == 0, and every such coupling with (u + v) % 3 == 1 stored as an explicit zero:
 /// interior rows whose pattern is not the full 3 x 3 lattice neighbourhood, and rows with
@@ -38,9 +41,20 @@ Eigen::SparseMatrix<double> thinned(const Eigen::SparseMatrix<double>& a, const 
   return out;
 }
 
+/// Per slot of level 0: the sum of A's row rounded to T, as the multigrid set-up stores it.
+template <typename T>
+std::vector<T> rowSumsOf(const GridLevel& fine, const Eigen::SparseMatrix<double>& a) {
+  const Eigen::VectorXd sums = a * Eigen::VectorXd::Ones(a.cols());
+  std::vector<T> out(static_cast<size_t>(fine.slotCount), T(0));
+  for (int u = 0; u < fine.unknownCount(); ++u)
+    out[static_cast<size_t>(fine.slotOfUnknown[static_cast<size_t>(u)])] = static_cast<T>(sums(u));
+  return out;
+}
+
 /// Level 0's data assigned from `a` as the multigrid set-up does, then A^1 from them.
 template <typename T>
-Eigen::SparseMatrix<double> coarseFromLevelData(const GridHierarchy& h, const SparseSum& a) {
+Eigen::SparseMatrix<double> coarseFromLevelData(const GridHierarchy& h,
+                                                const Eigen::SparseMatrix<double>& a) {
   const GridLevel& fine = h.level(0);
   detail::LevelSystem system;
   detail::classifyLevel(fine, a, MultigridOptions().weakRowReach, system);
@@ -51,7 +65,7 @@ Eigen::SparseMatrix<double> coarseFromLevelData(const GridHierarchy& h, const Sp
   detail::assignStencils<T>(fine, a, system, stencils);
   EXPECT_GT(system.interiorCount(), 0);
   EXPECT_GT(system.boundaryCount(), 0);
-  return detail::galerkinFromLevel<T>(fine, system, stencils, h.level(1));
+  return detail::galerkinFromLevel<T>(fine, system, stencils, rowSumsOf<T>(fine, a), h.level(1));
 }
 
 /// Expects c to have reference's pattern and, per column j, |c_ij - r_ij| <= tolerance *
@@ -85,6 +99,7 @@ TEST(LevelGalerkin, CoarseOperatorFromLevelDataEqualsTheProductOfA0) {
   const test::SyntheticProblem p = test::multiChartProblem(12);
   const GridHierarchy h = GridHierarchy::build(p.grid, 4, 16);
   ASSERT_GE(h.levelCount(), 2);
+  const Eigen::SparseMatrix<double> pt = h.prolongation(0).transpose();
   for (const bool thin : {false, true})
     for (const double alpha : {1e4, 1e-2}) {
       SCOPED_TRACE(::testing::Message() << "alpha " << alpha << (thin ? ", thinned" : ""));
@@ -96,11 +111,29 @@ TEST(LevelGalerkin, CoarseOperatorFromLevelDataEqualsTheProductOfA0) {
       const Eigen::SparseMatrix<double> reference = galerkinProduct(a, h.level(0), h.level(1));
       // Double stencils hold A^0's values: only the order of the sums differs.
       EXPECT_LE(expectSameProduct(coarseFromLevelData<double>(h, a), reference, 1e-13), 1e-13);
-      // Float stencils round each interior coefficient once (relative 2^-24); a coarse entry
-      // sums a few dozen such terms, none much larger than the column's largest (seen: 3e-8).
-      const double floatError = expectSameProduct(coarseFromLevelData<float>(h, a), reference,
-                                                  2.0 * std::numeric_limits<float>::epsilon());
+      // Float stencils round each interior coupling once (relative 2^-24); a coarse entry sums
+      // a few dozen such terms, none much larger than the column's largest (seen: 3e-8).
+      const Eigen::SparseMatrix<double> c = coarseFromLevelData<float>(h, a);
+      const double floatError =
+          expectSameProduct(c, reference, 2.0 * std::numeric_limits<float>::epsilon());
       EXPECT_GT(floatError, 0.0);  // the float route really read the float stencils
+      // Its row sums are Pᵀ (A^0 1) to the float rounding of A^0's row sums themselves, not of
+      // the couplings: the screening part (alpha M 1, as S 1 = 0) survives the rounding.
+      const Eigen::VectorXd ones = Eigen::VectorXd::Ones(c.cols());
+      const Eigen::VectorXd sums = c * ones, expected = reference * ones;
+      const Eigen::VectorXd bound = pt * (a * Eigen::VectorXd::Ones(a.cols())).cwiseAbs() *
+                                    (2.0 * std::numeric_limits<float>::epsilon());
+      const Eigen::VectorXd magnitudes = pt * (a.cwiseAbs() * Eigen::VectorXd::Ones(a.cols()));
+      for (Eigen::Index k = 0; k < c.cols(); ++k)
+        EXPECT_LE(std::abs(sums(k) - expected(k)), bound(k) + kSumRounding * magnitudes(k))
+            << "row " << k << ": " << sums(k) << " against " << expected(k);
+      // Symmetric like A^1 (the level-1 split reads its columns as rows, CHOLMOD one triangle):
+      // a boundary row rounds its couplings to interior texels as their stencils do.
+      const Eigen::SparseMatrix<double> asymmetry = c - Eigen::SparseMatrix<double>(c.transpose());
+      for (Eigen::Index k = 0; k < asymmetry.outerSize(); ++k)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(asymmetry, k); it; ++it)
+          EXPECT_LE(std::abs(it.value()), kSumRounding * magnitudes(k))
+              << "entries (" << it.row() << ", " << k << ") and (" << k << ", " << it.row() << ")";
     }
 }
 
