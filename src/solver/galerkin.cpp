@@ -215,15 +215,23 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
   const auto unknownOf = [&](int64_t slot) {
     return fine.unknownOfSlot[static_cast<size_t>(slot)];
   };
+  // Per box: index in boxRows of its first run with interior slots, and that run's lattice y
+  // (a box's runs are consecutive rows from there, LevelSystem::boxRows).
+  std::vector<std::pair<int64_t, int>> firstRun(fine.boxes.size(), {-1, 0});
+  for (size_t k = 0; k < system.boxRows.size(); ++k) {
+    const SlotRow& run = system.boxRows[k];
+    if (run.begin == run.end) continue;
+    const LatticePoint p = fine.pointOfSlot(run.begin);
+    auto& first = firstRun[static_cast<size_t>(p.box)];
+    if (first.first < 0) first = {static_cast<int64_t>(k), p.y};
+  }
   const auto rowOf = [&](int r, const auto& f) {
     const int64_t s = fine.slotOfUnknown[static_cast<size_t>(r)];
     if (system.kind[static_cast<size_t>(s)] == SlotKind::Interior) {
-      // The run holding slot s (runs of one y parity are in slot order), its colour q, index i.
-      const std::vector<SlotRow>& runs = system.rows[fine.point(r).y & 1];
-      const SlotRow& run =
-          *(std::upper_bound(runs.begin(), runs.end(), s,
-                             [](int64_t v, const SlotRow& x) { return v < x.begin; }) -
-            1);
+      // The run holding slot s, its colour q and index i.
+      const LatticePoint p = fine.point(r);
+      const auto& [first, y0] = firstRun[static_cast<size_t>(p.box)];
+      const SlotRow& run = system.boxRows[static_cast<size_t>(first + p.y - y0)];
       const int q = static_cast<int>((s - run.begin) & 1);
       const int64_t n = run.runLength(q), i = (s - run.begin) / 2;
       const T* w = stencils.data() + run.coeffsOf(q);
