@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "solver/grid_kernels.h"
+#include "solver/level_system.h"
 #include "texgrad/core/error.h"
 
 namespace texgrad {
@@ -56,17 +57,19 @@ struct Scratch {
   Block block;  ///< the current task's columns, grown once per thread and copied out exactly
 };
 
-/// Pᵀ A P with P given by its columns and rows: children(j, out) sets out to the (fine row,
-/// weight) entries of column j by increasing row, parents(r, f) calls f(coarse column, weight)
-/// for the entries of row r by increasing column.
-template <typename Children, typename Parents>
-Sparse galerkinColumns(const SparseSum& a, Eigen::Index nc, Children children, Parents parents) {
+/// Pᵀ A P with A (fine x fine) given by its rows and P by its columns and rows: rowOf(r, f) calls
+/// f(column, value) for the entries of row r of A, children(j, out) sets out to the (fine row,
+/// weight) entries of column j of P by increasing row, parents(r, f) calls f(coarse column,
+/// weight) for the entries of row r of P by increasing column.
+template <typename Rows, typename Children, typename Parents>
+Sparse galerkinColumns(Eigen::Index fine, Rows rowOf, Eigen::Index nc, Children children,
+                       Parents parents) {
   const Eigen::Index tasks = (nc + kColumnsPerTask - 1) / kColumnsPerTask;
   std::vector<Block> blocks(static_cast<size_t>(tasks));
   tbb::enumerable_thread_specific<Scratch> scratch;
   tbb::parallel_for(Eigen::Index(0), tasks, [&](Eigen::Index t) {
     Scratch& s = scratch.local();
-    s.fine.resize(a.rows());
+    s.fine.resize(fine);
     s.coarse.resize(nc);
     Block& block = s.block;
     block.count.clear();
@@ -79,8 +82,7 @@ Sparse galerkinColumns(const SparseSum& a, Eigen::Index nc, Children children, P
       s.coarse.touched.clear();
       children(j, s.column);
       for (const auto& [row, weight] : s.column)  // (A P)_{:, j}
-        for (int e = a.outer()[row]; e != a.outer()[row + 1]; ++e)
-          s.fine.add(a.inner()[e], a.value(e) * weight, j);
+        rowOf(row, [&, w = weight](int column, double value) { s.fine.add(column, value * w, j); });
       for (int r : s.fine.touched)  // (Pᵀ A P)_{:, j}
         parents(r, [&](int k, double weight) {
           s.coarse.add(k, weight * s.fine.value[static_cast<size_t>(r)], j);
@@ -120,36 +122,19 @@ Sparse galerkinColumns(const SparseSum& a, Eigen::Index nc, Children children, P
   return c;
 }
 
-/// Throws unless a is n x n with n = `fineUnknowns`.
-void requireSquare(const SparseSum& a, Eigen::Index fineUnknowns) {
-  if (a.rows() != fineUnknowns)
-    throw InvalidInputError("Galerkin product: matrix is " + std::to_string(a.rows()) + " x " +
-                            std::to_string(a.rows()) + " but the fine level has " +
-                            std::to_string(fineUnknowns) + " unknowns");
+/// Row source of galerkinColumns for a SparseSum: column r of the symmetric A is its row r.
+auto rowsOf(const SparseSum& a) {
+  return [&a](int r, const auto& f) {
+    for (int e = a.outer()[r]; e != a.outer()[r + 1]; ++e) f(a.inner()[e], a.value(e));
+  };
 }
 
-}  // namespace
-
-Sparse galerkinProduct(const SparseSum& a, const Sparse& p) {
-  requireSquare(a, p.rows());
-  const RowMajor pRows = p;  // row r of P: the coarse columns fine texel r interpolates from
+/// Pᵀ A P for the bilinear prolongation P from `coarse` to `fine`, from the lattice positions
+/// without storing P; rowOf gives the rows of A (galerkinColumns).
+template <typename Rows>
+Sparse latticeProduct(const GridLevel& fine, const GridLevel& coarse, Rows rowOf) {
   return galerkinColumns(
-      a, p.cols(),
-      [&](Eigen::Index j, std::vector<std::pair<int, double>>& out) {
-        out.clear();
-        for (Sparse::InnerIterator pi(p, j); pi; ++pi)
-          out.emplace_back(static_cast<int>(pi.row()), pi.value());
-      },
-      [&](int r, const auto& add) {
-        for (RowMajor::InnerIterator pr(pRows, r); pr; ++pr)
-          add(static_cast<int>(pr.col()), pr.value());
-      });
-}
-
-Sparse galerkinProduct(const SparseSum& a, const GridLevel& fine, const GridLevel& coarse) {
-  requireSquare(a, fine.unknownCount());
-  return galerkinColumns(
-      a, coarse.unknownCount(),
+      fine.unknownCount(), rowOf, coarse.unknownCount(),
       [&](Eigen::Index j, std::vector<std::pair<int, double>>& out) {
         // The fine texels within one lattice step of coarse texel j's position, in its chart.
         out.clear();
@@ -179,4 +164,117 @@ Sparse galerkinProduct(const SparseSum& a, const GridLevel& fine, const GridLeve
       });
 }
 
+/// Throws unless a is n x n with n = `fineUnknowns`.
+void requireSquare(const SparseSum& a, Eigen::Index fineUnknowns) {
+  if (a.rows() != fineUnknowns)
+    throw InvalidInputError("Galerkin product: matrix is " + std::to_string(a.rows()) + " x " +
+                            std::to_string(a.rows()) + " but the fine level has " +
+                            std::to_string(fineUnknowns) + " unknowns");
+}
+
+}  // namespace
+
+Sparse galerkinProduct(const SparseSum& a, const Sparse& p) {
+  requireSquare(a, p.rows());
+  const RowMajor pRows = p;  // row r of P: the coarse columns fine texel r interpolates from
+  return galerkinColumns(
+      a.rows(), rowsOf(a), p.cols(),
+      [&](Eigen::Index j, std::vector<std::pair<int, double>>& out) {
+        out.clear();
+        for (Sparse::InnerIterator pi(p, j); pi; ++pi)
+          out.emplace_back(static_cast<int>(pi.row()), pi.value());
+      },
+      [&](int r, const auto& add) {
+        for (RowMajor::InnerIterator pr(pRows, r); pr; ++pr)
+          add(static_cast<int>(pr.col()), pr.value());
+      });
+}
+
+Sparse galerkinProduct(const SparseSum& a, const GridLevel& fine, const GridLevel& coarse) {
+  requireSquare(a, fine.unknownCount());
+  return latticeProduct(fine, coarse, rowsOf(a));
+}
+
+namespace detail {
+
+// Why reading all 9 lattice neighbours of an interior row keeps the pattern of Pᵀ A P although A
+// may lack some of them (the walk's symbolic phase forms A^1 from A's pattern, its numeric phase
+// from the stencils, and both must agree): an extra entry (u, v), v a lattice neighbour of u,
+// adds coarse entries (J, K) for the parents J of u and K of v. Per axis 2J and 2K lie within one
+// fine step of u and of v, so the fine texel m = J + K lies in u's 3 x 3 neighbourhood, all
+// unknowns of u's chart (u's footprint is interior), and is a child of both J and K: m's
+// diagonal entry already gives (J, K). The extra entries carry zeros, which add nothing.
+template <typename T>
+Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
+                         const std::vector<T>& stencils, const std::vector<T>& rowSums,
+                         const GridLevel& coarse) {
+  if (stencils.size() != static_cast<size_t>(system.stencilSize) ||
+      rowSums.size() != static_cast<size_t>(fine.slotCount) ||
+      system.boundaryRows.ptr.size() != static_cast<size_t>(system.boundaryCount()) + 1)
+    throw InvalidInputError("Galerkin product: level data not assigned");
+  const auto unknownOf = [&](int64_t slot) {
+    return fine.unknownOfSlot[static_cast<size_t>(slot)];
+  };
+  // Per box: index in boxRows of its first run with interior slots, and that run's lattice y
+  // (a box's runs are consecutive rows from there, LevelSystem::boxRows).
+  std::vector<std::pair<int64_t, int>> firstRun(fine.boxes.size(), {-1, 0});
+  for (size_t k = 0; k < system.boxRows.size(); ++k) {
+    const SlotRow& run = system.boxRows[k];
+    if (run.begin == run.end) continue;
+    const LatticePoint p = fine.pointOfSlot(run.begin);
+    auto& first = firstRun[static_cast<size_t>(p.box)];
+    if (first.first < 0) first = {static_cast<int64_t>(k), p.y};
+  }
+  const auto rowOf = [&](int r, const auto& f) {
+    const int64_t s = fine.slotOfUnknown[static_cast<size_t>(r)];
+    if (system.kind[static_cast<size_t>(s)] == SlotKind::Interior) {
+      // The run holding slot s, its colour q and index i.
+      const LatticePoint p = fine.point(r);
+      const auto& [first, y0] = firstRun[static_cast<size_t>(p.box)];
+      const SlotRow& run = system.boxRows[static_cast<size_t>(first + p.y - y0)];
+      const int q = static_cast<int>((s - run.begin) & 1);
+      const int64_t n = run.runLength(q), i = (s - run.begin) / 2;
+      const T* w = stencils.data() + run.coeffsOf(q);
+      double off = 0.0;
+      for (int k = 0; k < 9; ++k) {  // stencil index k = (dy + 1) * 3 + (dx + 1)
+        const int v = unknownOf(s + (k / 3 - 1) * int64_t(run.width) + (k % 3 - 1));
+        if (k == 4 || v < 0) continue;  // (A has no entry at an empty slot)
+        const double value = static_cast<double>(w[k * n + i]);
+        off += value;
+        f(v, value);
+      }
+      f(r, static_cast<double>(rowSums[static_cast<size_t>(s)]) - off);
+      return;
+    }
+    // Boundary indices grow with the unknown index (classifyLevel): find r's by bisection.
+    const auto& slots = system.boundarySlots;
+    const size_t j = static_cast<size_t>(
+        std::lower_bound(slots.begin(), slots.end(), r,
+                         [&](int32_t slot, int v) { return unknownOf(slot) < v; }) -
+        slots.begin());
+    const SlotCsr& rows = system.boundaryRows;
+    const int64_t offEnd = system.offBlockEnd[j];
+    double rounding = 0.0;  // of the couplings to interior texels, which their stencils hold in T
+    for (int64_t e = rows.ptr[j]; e != offEnd; ++e) {
+      const double exact = rows.val[static_cast<size_t>(e)];
+      const double value = static_cast<double>(static_cast<T>(exact));
+      rounding += exact - value;
+      f(unknownOf(rows.col[static_cast<size_t>(e)]), value);
+    }
+    for (int64_t e = offEnd; e != rows.ptr[j + 1]; ++e) {
+      const int v = unknownOf(rows.col[static_cast<size_t>(e)]);
+      f(v, rows.val[static_cast<size_t>(e)] + (v == r ? rounding : 0.0));
+    }
+  };
+  return latticeProduct(fine, coarse, rowOf);
+}
+
+template Sparse galerkinFromLevel<float>(const GridLevel&, const LevelSystem&,
+                                         const std::vector<float>&, const std::vector<float>&,
+                                         const GridLevel&);
+template Sparse galerkinFromLevel<double>(const GridLevel&, const LevelSystem&,
+                                          const std::vector<double>&, const std::vector<double>&,
+                                          const GridLevel&);
+
+}  // namespace detail
 }  // namespace texgrad

@@ -119,4 +119,21 @@ template <typename T>
 void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSystem& system,
                     std::vector<T>& stencils);
 
+/// Pᵀ Ã P for the bilinear prolongation P from `fine` to `coarse`, where Ã is A^l as the fine
+/// level's assigned data hold it, read without a matrix: an interior row is its stencil at all 9
+/// lattice neighbours (couplings in T; an entry A^l lacks is a zero coefficient) with the
+/// diagonal rowSums[slot] minus those couplings, the difference form the cycles apply; a
+/// boundary row is its boundaryRows entry, with its couplings to interior texels rounded to T as
+/// their stencils hold them and the rounding moved to its diagonal. So Ã is symmetric and Ã 1 =
+/// rowSums: rounding the couplings to float perturbs A^l only by a matrix with zero row sums, not
+/// the small screening part that nearly singular systems hinge on. Equals galerkinProduct(A^l,
+/// fine, coarse) in pattern when every row of A^l stores its diagonal (galerkin.cpp says why),
+/// and for T = double in value up to the order of the sums. Defined in galerkin.cpp: one product
+/// kernel.
+template <typename T>
+Eigen::SparseMatrix<double> galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
+                                              const std::vector<T>& stencils,
+                                              const std::vector<T>& rowSums,
+                                              const GridLevel& coarse);
+
 }  // namespace texgrad::detail

@@ -178,7 +178,7 @@ struct MultigridSolver<Scalar>::Impl {
   std::vector<Level> levels;
   std::vector<int64_t> nonZeros;  // per level, of A^l
   std::vector<int64_t> heldMatrixBytes;  // per level (MultigridLevelInfo::setUpMatrixBytes)
-  std::vector<T> rowSums;         // per slot of level 0: sum of A^0's row (applyOperator)
+  std::vector<T> rowSums;  // per slot of level 0: sum of A^0's row (applyOperator, A^1's set-up)
   CholmodSolver coarseSolver;
   Eigen::MatrixXd coarseWork;
   MultigridStats stats;
@@ -205,10 +205,13 @@ struct MultigridSolver<Scalar>::Impl {
   /// `symbolicPhase` builds the split and the CHOLMOD analyses from the patterns (Galerkin
   /// products never drop an entry, so the values do not change any pattern);
   /// `numericPhase` fills stencils and boundary data and factorises. Both at once cost one
-  /// chain of Galerkin products instead of two. A^{l+1} is formed before level l's data are
-  /// filled in, so the product's temporaries never coexist with them (lower peak memory), and
-  /// A^l is freed once both exist. `handedOver`, if given, is the matrix a0 views, owned by the
-  /// walk: it is freed like A^l, so A^0 is not held while the coarser levels are built.
+  /// chain of Galerkin products instead of two. For l > 0, A^{l+1} is formed before level l's
+  /// data are filled in, so the product's temporaries never coexist with them, and A^l is freed
+  /// once both exist. Level 0 goes the other way in the numeric phase: its data are filled in
+  /// from A^0, then A^0 is freed if handed over (`handedOver`: the matrix a0 views, owned by the
+  /// walk), then A^1 is formed from level 0's data (galerkinFromLevel), so A^0 and A^1 never
+  /// coexist (docs/memory.md). The symbolic phase alone has no level-0 data and forms A^1 from
+  /// A^0's pattern: the same pattern (galerkinFromLevel).
   void walkLevels(const SparseSum& a0, bool symbolicPhase, bool numericPhase,
                   Eigen::SparseMatrix<double>* handedOver = nullptr) {
     if (symbolicPhase) {
@@ -235,9 +238,10 @@ struct MultigridSolver<Scalar>::Impl {
             std::to_string(nonZeros[sl]) + "; call init again when the sparsity changes");
       }
       if (l > 0 && numericPhase) shiftDiagonal(coarse);
+      const bool fromLevelData = l == 0 && numericPhase && l < coarsest();
       // Initialised, never assigned: Eigen 3.4's SparseMatrix has no move assignment, so
       // `x = product` would copy it.
-      Eigen::SparseMatrix<double> next = l < coarsest()
+      Eigen::SparseMatrix<double> next = l < coarsest() && !fromLevelData
                                              ? galerkinProduct(a, grid, hierarchy.level(l + 1))
                                              : Eigen::SparseMatrix<double>();
       if (l < coarsest() || l == 0) {
@@ -268,14 +272,22 @@ struct MultigridSolver<Scalar>::Impl {
         if (numericPhase) coarseSolver.factorize(direct);
         heldMatrixBytes[sl] = sparseBytes(formed);
       }
-      // The matrices held now, with level l's data: A^l (A^0 only if handed over) and A^{l+1}.
+      // The matrices held with level l's data: A^l (A^0 only if handed over) and A^{l+1}; at
+      // level 0 from its data, a handed-over A^0 and then A^1, never both.
+      const int64_t handedBytes = l == 0 && handedOver ? sparseBytes(*handedOver) : 0;
+      if (l == 0 && handedOver) Eigen::SparseMatrix<double>().swap(*handedOver);  // A^0
+      if (fromLevelData) {
+        Eigen::SparseMatrix<double> formed =
+            detail::galerkinFromLevel(grid, lv.sys, lv.stencil, rowSums, hierarchy.level(l + 1));
+        next.swap(formed);
+      }
       heldMatrixBytes[sl] +=
-          sparseBytes(coarse) + sparseBytes(next) + (handedOver ? sparseBytes(*handedOver) : 0);
+          sparseBytes(coarse) + (fromLevelData ? std::max(handedBytes, sparseBytes(next))
+                                               : handedBytes + sparseBytes(next));
       if (l < coarsest()) {
         coarse.swap(next);  // next now holds A^l, freed at the end of this iteration
         a = SparseSum(coarse);
       }
-      if (l == 0 && handedOver) Eigen::SparseMatrix<double>().swap(*handedOver);  // A^0
     }
   }
 

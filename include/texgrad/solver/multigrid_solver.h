@@ -73,8 +73,9 @@ struct MultigridLevelInfo {
   int64_t boundaryNonZeros = 0; ///< of A_bb^l (of A^l on a coarsest level solved directly)
   int64_t factorNonZeros = 0;   ///< of the Cholesky factor of that block
   int64_t slots = 0;            ///< lattice slots of the level's boxes
-  /// Bytes of the sparse matrices the last set-up held once this level's data were built: A^l
-  /// (A^0 only if handed over, or formed for a direct solve) and A^{l+1} (docs/memory.md).
+  /// Bytes of the sparse matrices the last set-up held at once with this level's data: A^l
+  /// (A^0 only if handed over, or formed for a direct solve) and A^{l+1}; at level 0 of a numeric
+  /// set-up the larger of a handed-over A^0 and A^1, formed after A^0 is freed (docs/memory.md).
   int64_t setUpMatrixBytes = 0;
   bool direct = false;          ///< the coarsest level, solved directly
 };

@@ -1,0 +1,159 @@
+// Solver tests: A^1 formed from level 0's own data (stencils and boundary rows) equals the Galerkin
+// product of the matrix they came from, so the set-up can free A^0 before forming A^1.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <vector>
+
+#include "solver/level_system.h"
+#include "synthetic_problem.h"
+#include "texgrad/solver/galerkin.h"
+#include "texgrad/solver/grid_hierarchy.h"
+#include "texgrad/solver/multigrid_solver.h"
+
+using namespace texgrad;
+
+namespace {
+
+/// Bound on double rounding in a sum, relative to the sum of the magnitudes of its terms.
+constexpr double kSumRounding = 1e-14;
+
+/// A^0 with the couplings between footprint-interior diagonal neighbours (u, v) removed where
+/// (u + v) % 3 == 0, and every such coupling with (u + v) % 3 == 1 stored as an explicit zero:
+/// interior rows whose pattern is not the full 3 x 3 lattice neighbourhood, and rows with
+/// stored zeros, which rows read back from the stencils must reproduce.
+Eigen::SparseMatrix<double> thinned(const Eigen::SparseMatrix<double>& a, const GridLevel& level) {
+  Eigen::SparseMatrix<double> out = a;
+  for (int v = 0; v < out.outerSize(); ++v)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(out, v); it; ++it) {
+      const int u = static_cast<int>(it.row());
+      const LatticePoint p = level.point(u), q = level.point(v);
+      const bool diagonal = p.box == q.box && std::abs(p.x - q.x) == 1 && std::abs(p.y - q.y) == 1;
+      if (!diagonal || !level.footprintInterior[static_cast<size_t>(u)] ||
+          !level.footprintInterior[static_cast<size_t>(v)] || (u + v) % 3 == 2)
+        continue;
+      it.valueRef() = (u + v) % 3 == 0 ? std::numeric_limits<double>::quiet_NaN() : 0.0;
+    }
+  out.prune([](Eigen::Index, Eigen::Index, double value) { return !std::isnan(value); });
+  return out;
+}
+
+/// Per slot of level 0: the sum of A's row rounded to T, as the multigrid set-up stores it.
+template <typename T>
+std::vector<T> rowSumsOf(const GridLevel& fine, const Eigen::SparseMatrix<double>& a) {
+  const Eigen::VectorXd sums = a * Eigen::VectorXd::Ones(a.cols());
+  std::vector<T> out(static_cast<size_t>(fine.slotCount), T(0));
+  for (int u = 0; u < fine.unknownCount(); ++u)
+    out[static_cast<size_t>(fine.slotOfUnknown[static_cast<size_t>(u)])] = static_cast<T>(sums(u));
+  return out;
+}
+
+/// Level 0's data assigned from `a` as the multigrid set-up does, then A^1 from them.
+template <typename T>
+Eigen::SparseMatrix<double> coarseFromLevelData(const GridHierarchy& h,
+                                                const Eigen::SparseMatrix<double>& a) {
+  const GridLevel& fine = h.level(0);
+  detail::LevelSystem system;
+  detail::classifyLevel(fine, a, MultigridOptions().weakRowReach, system);
+  detail::indexUnknowns(fine, system);
+  detail::assignBoundary(fine, a, system);
+  detail::releaseUnknownIndex(system);
+  std::vector<T> stencils;
+  detail::assignStencils<T>(fine, a, system, stencils);
+  EXPECT_GT(system.interiorCount(), 0);
+  EXPECT_GT(system.boundaryCount(), 0);
+  return detail::galerkinFromLevel<T>(fine, system, stencils, rowSumsOf<T>(fine, a), h.level(1));
+}
+
+/// Expects c to have reference's pattern and, per column j, |c_ij - r_ij| <= tolerance *
+/// max_i |r_ij|; returns the largest such relative difference.
+double expectSameProduct(const Eigen::SparseMatrix<double>& c,
+                         const Eigen::SparseMatrix<double>& reference, double tolerance) {
+  EXPECT_EQ(c.rows(), reference.rows());
+  EXPECT_EQ(c.nonZeros(), reference.nonZeros());
+  if (c.nonZeros() != reference.nonZeros() || c.cols() != reference.cols()) return 1.0;
+  double largest = 0.0;
+  for (Eigen::Index j = 0; j < c.cols(); ++j) {
+    const int begin = reference.outerIndexPtr()[j], end = reference.outerIndexPtr()[j + 1];
+    EXPECT_EQ(c.outerIndexPtr()[j + 1], end) << "column " << j;
+    double scale = 0.0;
+    for (int e = begin; e < end; ++e) scale = std::max(scale, std::abs(reference.valuePtr()[e]));
+    for (int e = begin; e < end; ++e) {
+      EXPECT_EQ(c.innerIndexPtr()[e], reference.innerIndexPtr()[e]) << "column " << j;
+      const double relative = std::abs(c.valuePtr()[e] - reference.valuePtr()[e]) / scale;
+      largest = std::max(largest, relative);
+      EXPECT_LE(relative, tolerance) << "entry (" << c.innerIndexPtr()[e] << ", " << j << ")";
+    }
+  }
+  return largest;
+}
+
+}  // namespace
+
+TEST(LevelGalerkin, CoarseOperatorFromLevelDataEqualsTheProductOfA0) {
+  // Three charts with seams (boundary rows with far-away entries), partial cells (boundary
+  // texels) and, in the thinned variant, interior rows with absent and stored-zero neighbours.
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  const GridHierarchy h = GridHierarchy::build(p.grid, 4, 16);
+  ASSERT_GE(h.levelCount(), 2);
+  const Eigen::SparseMatrix<double> pt = h.prolongation(0).transpose();
+  for (const bool thin : {false, true})
+    for (const double alpha : {1e4, 1e-2}) {
+      SCOPED_TRACE(::testing::Message() << "alpha " << alpha << (thin ? ", thinned" : ""));
+      const Eigen::SparseMatrix<double> full = p.system(alpha);
+      const Eigen::SparseMatrix<double> a = thin ? thinned(full, h.level(0)) : full;
+      if (thin) {
+        ASSERT_LT(a.nonZeros(), full.nonZeros());
+      }
+      const Eigen::SparseMatrix<double> reference = galerkinProduct(a, h.level(0), h.level(1));
+      // Double stencils hold A^0's values: only the order of the sums differs.
+      EXPECT_LE(expectSameProduct(coarseFromLevelData<double>(h, a), reference, 1e-13), 1e-13);
+      // Float stencils round each interior coupling once (relative 2^-24); a coarse entry sums
+      // a few dozen such terms, none much larger than the column's largest (seen: 3e-8).
+      const Eigen::SparseMatrix<double> c = coarseFromLevelData<float>(h, a);
+      const double floatError =
+          expectSameProduct(c, reference, 2.0 * std::numeric_limits<float>::epsilon());
+      EXPECT_GT(floatError, 0.0);  // the float route really read the float stencils
+      // Its row sums are Pᵀ (A^0 1) to the float rounding of A^0's row sums themselves, not of
+      // the couplings: the screening part (alpha M 1, as S 1 = 0) survives the rounding.
+      const Eigen::VectorXd ones = Eigen::VectorXd::Ones(c.cols());
+      const Eigen::VectorXd sums = c * ones, expected = reference * ones;
+      const Eigen::VectorXd bound = pt * (a * Eigen::VectorXd::Ones(a.cols())).cwiseAbs() *
+                                    (2.0 * std::numeric_limits<float>::epsilon());
+      const Eigen::VectorXd magnitudes = pt * (a.cwiseAbs() * Eigen::VectorXd::Ones(a.cols()));
+      for (Eigen::Index k = 0; k < c.cols(); ++k)
+        EXPECT_LE(std::abs(sums(k) - expected(k)), bound(k) + kSumRounding * magnitudes(k))
+            << "row " << k << ": " << sums(k) << " against " << expected(k);
+      // Symmetric like A^1 (the level-1 split reads its columns as rows, CHOLMOD one triangle):
+      // a boundary row rounds its couplings to interior texels as their stencils do.
+      const Eigen::SparseMatrix<double> asymmetry = c - Eigen::SparseMatrix<double>(c.transpose());
+      for (Eigen::Index k = 0; k < asymmetry.outerSize(); ++k)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(asymmetry, k); it; ++it)
+          EXPECT_LE(std::abs(it.value()), kSumRounding * magnitudes(k))
+              << "entries (" << it.row() << ", " << k << ") and (" << k << ", " << it.row() << ")";
+    }
+}
+
+TEST(LevelGalerkin, SolverKeepsTheCoarsePatternOfInitForInteriorRowsOfAnyPattern) {
+  // init forms A^1 from A^0's pattern, update from level 0's stencils: the pattern of A^1 must be
+  // the same (update throws otherwise), also when interior rows lack lattice neighbours or store
+  // zeros, and equal to the Galerkin product's.
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  MultigridOptions o;
+  o.minCoarseUnknowns = 16;
+  MultigridSolver<float> solver(o);
+  solver.init(p.grid, p.system(1.0));
+  const Eigen::SparseMatrix<double> a = thinned(p.system(1.0), solver.hierarchy().level(0));
+  ASSERT_LT(a.nonZeros(), p.system(1.0).nonZeros());
+  solver.init(p.grid, a);
+  EXPECT_NO_THROW(solver.update(a));
+  const Eigen::SparseMatrix<double> a1 =
+      galerkinProduct(a, solver.hierarchy().level(0), solver.hierarchy().level(1));
+  EXPECT_EQ(solver.levelInfo()[1].nonZeros, a1.nonZeros());
+  Eigen::SparseMatrix<double> handed = a;
+  EXPECT_NO_THROW(solver.update(std::move(handed)));
+  EXPECT_EQ(solver.levelInfo()[1].nonZeros, a1.nonZeros());
+}
