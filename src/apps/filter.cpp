@@ -206,11 +206,11 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
   const TexelValues x0 = options.normalMap
                              ? TexelValues(domain.grid(), decoded, nullptr)
                              : TexelValues(domain.grid(), texture, levels ? &*levels : nullptr);
-  // Built once the texture is held as its levels: the hierarchy is the solver's only read of
-  // the grid's maps.
-  std::optional<SystemSolver> solver(std::in_place, domain.grid(), options.solver);
   const BarelyCoveredNeighbours barely = barelyBound(domain, ops, options);
   const Eigen::MatrixXd barelyX0 = x0.rows(barely.unknowns);
+  // Built once the texture is held as its levels and the barely covered texels are found (their
+  // search's arrays are gone): the hierarchy is the solver's only read of the grid's maps.
+  std::optional<SystemSolver> solver(std::in_place, domain.grid(), options.solver);
   // The grid's maps go once nothing reads them: now, or with a beta map once the right-hand
   // side is formed (modulatedStiffness integrates the pieces of every cell again).
   const bool mapped = !options.betaPerCell.empty();
