@@ -196,7 +196,9 @@ struct GeodesicSolver::Impl {
   GeodesicOptions options_;
   double scale_ = 1.0;
   std::unique_ptr<GeodesicGradients> gradients_;
-  SystemSolver diffusionSolver_, distanceSolver_;
+  /// Each made when first set up (a SystemSolver builds its hierarchy when made, so a solver
+  /// made early would hold one before it is needed); solveOnce frees the diffusion one.
+  std::optional<SystemSolver> diffusionSolver_, distanceSolver_;
   std::unique_ptr<SystemSolver> dirichletSolver_;  ///< only with Average on meshes with boundary
   bool averaged_ = false;  ///< the heat is the mean of two diffusions (a Dirichlet solver is made)
   bool oneShot_ = false;   ///< see the constructor
@@ -227,8 +229,8 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
         options.validate();
         return options;
       }()),
-      diffusionSolver_(domain.grid(), options.solver, MatrixCopy::Kept),  // matrix() read below
-      distanceSolver_(domain.grid(), options.solver) {
+      // matrix() is read below
+      diffusionSolver_(std::in_place, domain.grid(), options.solver, MatrixCopy::Kept) {
   oneShot_ = oneShot;
   const auto start = Clock::now();
   const TexelOperators& ops = domain.operators();
@@ -237,8 +239,8 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
   scale_ = std::sqrt(area);
   if (!oneShot) makeGradients();
   // A1 and A2 live in their solvers only (SystemSolver::matrix()).
-  diffusionSolver_.initAndUpdate(heatSystem(ops, options_.alpha),
-                                 renameStage(progress, "heat setup"));
+  diffusionSolver_->initAndUpdate(heatSystem(ops, options_.alpha),
+                                  renameStage(progress, "heat setup"));
   // The cut-cell ghost penalty keeps barely covered texels from amplifying the inconsistency
   // of the normalised gradient (see Gradients::stabiliser).
   if (!oneShot) setUpDistance(gradients_->stabiliser(domain.unknowns()), progress);
@@ -268,8 +270,9 @@ void GeodesicSolver::Impl::makeGradients() {
 
 void GeodesicSolver::Impl::setUpDistance(const Eigen::SparseMatrix<double>& ghost,
                                          const ProgressCallback& progress) {
-  distanceSolver_.initAndUpdate(distanceSystem(domain_->operators(), ghost),
-                                renameStage(progress, "distance setup"));
+  distanceSolver_.emplace(domain_->grid(), options_.solver);
+  distanceSolver_->initAndUpdate(distanceSystem(domain_->operators(), ghost),
+                                 renameStage(progress, "distance setup"));
 }
 
 void GeodesicSolver::Impl::buildDirichlet(const ProgressCallback& progress) {
@@ -297,13 +300,13 @@ void GeodesicSolver::Impl::buildDirichlet(const ProgressCallback& progress) {
   dirichletCount_ = static_cast<int>(std::count(dirichlet_.begin(), dirichlet_.end(), 1));
   dirichletSolver_ = std::make_unique<SystemSolver>(grid, options_.solver);
   averaged_ = true;
-  dirichletSolver_->init(diffusionSolver_.matrix());
+  dirichletSolver_->init(diffusionSolver_->matrix());
   updateDirichlet(renameStage(progress, "dirichlet heat setup"));
 }
 
 void GeodesicSolver::Impl::updateDirichlet(const ProgressCallback& progress) {
   // A1 with the rows and columns of held texels reduced to their diagonal: same pattern, SPD.
-  Eigen::SparseMatrix<double> a = diffusionSolver_.matrix();
+  Eigen::SparseMatrix<double> a = diffusionSolver_->matrix();
   for (int j = 0; j < a.outerSize(); ++j)
     for (Eigen::SparseMatrix<double>::InnerIterator it(a, j); it; ++it)
       if ((dirichlet_[static_cast<size_t>(it.row())] || dirichlet_[static_cast<size_t>(j)]) &&
@@ -334,7 +337,7 @@ void GeodesicSolver::Impl::setAlpha(double alpha) {
   next.validate();
   options_ = next;
   const TexelOperators& ops = domain_->operators();
-  diffusionSolver_.update(heatSystem(ops, options_.alpha));
+  diffusionSolver_->update(heatSystem(ops, options_.alpha));
   if (dirichletSolver_) updateDirichlet();
   resetIterates();
 }
@@ -373,7 +376,7 @@ void GeodesicSolver::Impl::setSources(std::span<const GeodesicSource> sources) {
 }
 
 void GeodesicSolver::Impl::labelComponents() {
-  const Eigen::SparseMatrix<double>& a1 = diffusionSolver_.matrix();
+  const Eigen::SparseMatrix<double>& a1 = diffusionSolver_->matrix();
   const int n = static_cast<int>(a1.outerSize());
   component_.assign(static_cast<size_t>(n), -1);
   componentCount_ = 0;
@@ -580,9 +583,9 @@ void GeodesicSolver::Impl::diffusionStep(bool full, const ProgressCallback& prog
   timings_.diffusion = 0.0;
   timings_.divergence = 0.0;
   if (!full && heatSettled_) return;  // u, and so the divergence, stay as they are
-  diffusionReport_ = full
-                         ? diffusionSolver_.solve(impulse_, u_, renameStage(progress, "heat solve"))
-                         : diffusionSolver_.refine(impulse_, u_, true);
+  diffusionReport_ =
+      full ? diffusionSolver_->solve(impulse_, u_, renameStage(progress, "heat solve"))
+           : diffusionSolver_->refine(impulse_, u_, true);
   double residual = lastResidual(diffusionReport_);
   if (dirichletSolver_) {
     const SolveReport report =
@@ -613,8 +616,8 @@ void GeodesicSolver::Impl::distanceStep(bool full, const ProgressCallback& progr
   computeDivergence();
   const auto start = Clock::now();
   distanceReport_ =
-      full ? distanceSolver_.solve(divergence_, y_, renameStage(progress, "distance solve"))
-           : distanceSolver_.refine(divergence_, y_, false);
+      full ? distanceSolver_->solve(divergence_, y_, renameStage(progress, "distance solve"))
+           : distanceSolver_->refine(divergence_, y_, false);
   // y moves by its offset every time, so its constant part stays the size of the distances. With
   // float V-cycles (refine), S's float rounding perturbs its null space (the constants) by far
   // more than eps M: a drifting constant in y would leak into the distances.
@@ -640,10 +643,10 @@ void GeodesicSolver::Impl::update() {
 
 double GeodesicSolver::Impl::residual() const {
   requireSources();
-  double worst = diffusionSolver_.relativeResidual(impulse_, u_);
+  double worst = diffusionSolver_->relativeResidual(impulse_, u_);
   if (dirichletSolver_)
     worst = std::max(worst, dirichletSolver_->relativeResidual(impulseDirichlet_, uDirichlet_));
-  return std::max(worst, distanceSolver_.relativeResidual(divergence_, y_));
+  return std::max(worst, distanceSolver_->relativeResidual(divergence_, y_));
 }
 
 void GeodesicSolver::Impl::solve(const ProgressCallback& progress) {
@@ -655,7 +658,7 @@ void GeodesicSolver::Impl::solve(const ProgressCallback& progress) {
 void GeodesicSolver::Impl::solveOnce(const ProgressCallback& progress) {
   requireSources();
   diffusionStep(true, progress);
-  diffusionSolver_ = SystemSolver(domain_->grid(), options_.solver);
+  diffusionSolver_.reset();
   dirichletSolver_.reset();
   impulse_ = impulseDirichlet_ = Eigen::MatrixXd();
   auto start = Clock::now();
