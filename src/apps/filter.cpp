@@ -336,14 +336,19 @@ FilterResult filterTexture(const TexelDomain& domain, Image texture, const Filte
 
 namespace {
 
-/// The operators handed to filterTexture, or InvalidInputError if they are not the domain's.
-const TexelOperators& requireDomainsOperators(const TexelDomain& domain,
-                                              const std::unique_ptr<TexelOperators>& operators) {
+/// The one-shot filter on operators handed over by the caller (both consuming overloads): checks
+/// they are the domain's, and frees the grid's maps too when the domain holds no operators.
+FilterResult filterHandedOver(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
+                              Image texture, std::optional<std::vector<uint8_t>> levels,
+                              const FilterOptions& options, const ProgressCallback& progress) {
   if (!operators || operators->mass().rows() != domain.unknowns())
     throw InvalidInputError(
         "filterTexture: the operators handed over are not the domain's "
         "(TexelDomain::releaseOperators)");
-  return *operators;
+  const TexelOperators& ops = *operators;
+  TexelDomain* mapsOwner = domain.hasOperators() ? nullptr : &domain;
+  return filterOnce(domain, ops, std::move(operators), mapsOwner, std::move(texture),
+                    std::move(levels), options, progress);
 }
 
 }  // namespace
@@ -351,16 +356,13 @@ const TexelOperators& requireDomainsOperators(const TexelDomain& domain,
 FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
                            Image texture, const FilterOptions& options,
                            const ProgressCallback& progress) {
-  const TexelOperators& ops = requireDomainsOperators(domain, operators);
-  TexelDomain* mapsOwner = domain.hasOperators() ? nullptr : &domain;
-  return filterOnce(domain, ops, std::move(operators), mapsOwner, std::move(texture), std::nullopt,
-                    options, progress);
+  return filterHandedOver(domain, std::move(operators), std::move(texture), std::nullopt, options,
+                          progress);
 }
 
 FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
                            Image texture, std::vector<uint8_t> levels, const FilterOptions& options,
                            const ProgressCallback& progress) {
-  const TexelOperators& ops = requireDomainsOperators(domain, operators);
   const size_t values = static_cast<size_t>(texture.width) * static_cast<size_t>(texture.height) *
                         static_cast<size_t>(texture.channels);
   if (texture.format != PixelFormat::UInt8 || levels.size() != values)
@@ -368,9 +370,8 @@ FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> 
                             std::to_string(texture.width) + "x" + std::to_string(texture.height) +
                             "x" + std::to_string(texture.channels) + " texture (exactByteLevels)");
   texture.pixels = std::vector<float>();
-  TexelDomain* mapsOwner = domain.hasOperators() ? nullptr : &domain;
-  return filterOnce(domain, ops, std::move(operators), mapsOwner, std::move(texture),
-                    std::move(levels), options, progress);
+  return filterHandedOver(domain, std::move(operators), std::move(texture), std::move(levels),
+                          options, progress);
 }
 
 }  // namespace texgrad
