@@ -51,15 +51,15 @@ class TexelValues {
   }
   int channels() const { return image_.channels; }
   /// gatherTexels(grid, image)(u, c): the nearest image texel for active texels outside it.
-  double operator()(int u, int c) const {
+  float operator()(int u, int c) const {
     const auto [i, j] = imageTexelOf(grid_, u);
     const size_t k = image_.index(i, j, c);
     return levels_ ? byteLevelValues()[(*levels_)[k]] : image_.pixels[k];
   }
-  /// Channel c at every unknown (unknowns x 1).
-  Eigen::MatrixXd channel(int c) const {
-    Eigen::MatrixXd values(grid_.unknownCount(), 1);
-    for (int u = 0; u < grid_.unknownCount(); ++u) values(u, 0) = (*this)(u, c);
+  /// Channel c at every unknown: floats, as the values are (half the bytes of doubles).
+  Eigen::VectorXf channel(int c) const {
+    Eigen::VectorXf values(grid_.unknownCount());
+    for (int u = 0; u < grid_.unknownCount(); ++u) values(u) = (*this)(u, c);
     return values;
   }
   /// Every channel at `unknowns` (row i for unknowns[i]).
@@ -77,32 +77,43 @@ class TexelValues {
   const std::vector<uint8_t>* levels_;
 };
 
-/// alpha M x0 + S_beta x0, one n x 1 block per channel, with one channel of x0 and one product
-/// held at a time. The same operations per value, in the same order, as InteractiveFilter's
-/// from its stored M x0 and S x0, so the same bits; with beta 0 and no map S x0 is not formed
-/// (InteractiveFilter adds 0 S x0, which changes no value but the sign of a zero).
-std::vector<Eigen::MatrixXd> screenedRightHandSide(const TexelOperators& ops, const TexelValues& x0,
+/// The filter's right-hand side as it is solved for: rounded to float. Both filters solve with
+/// it, so they solve the same system; the one-shot filter holds its channels through the
+/// solver's set-up at half the bytes (the float cycles read the rhs at float precision anyway,
+/// and the rounding, 6e-8 relative, is far below the solver's tolerance).
+Eigen::MatrixXd roundedRightHandSide(const Eigen::MatrixXd& rhs) {
+  return rhs.cast<float>().cast<double>();
+}
+
+/// alpha M x0 + S_beta x0, one n x 1 float block per channel (roundedRightHandSide), with one
+/// channel of x0 and one product held at a time. The same operations per value, in the same
+/// order, as InteractiveFilter's from its stored M x0 and S x0, so the same bits; with beta 0
+/// and no map S x0 is not formed (InteractiveFilter adds 0 S x0, which changes no value but the
+/// sign of a zero).
+std::vector<Eigen::VectorXf> screenedRightHandSide(const TexelOperators& ops, const TexelValues& x0,
                                                    const FilterOptions& options) {
-  std::vector<Eigen::MatrixXd> rhs(static_cast<size_t>(x0.channels()));
+  std::vector<Eigen::VectorXf> rhs(static_cast<size_t>(x0.channels()));
   const bool mapped = !options.betaPerCell.empty();
   const Eigen::SparseMatrix<double> modulated =
       mapped ? ops.modulatedStiffness(options.betaPerCell) : Eigen::SparseMatrix<double>();
-  Eigen::MatrixXd product;
+  Eigen::MatrixXd b, product;
   for (int c = 0; c < x0.channels(); ++c) {
-    Eigen::MatrixXd& b = rhs[static_cast<size_t>(c)];
-    const Eigen::MatrixXd x0c = x0.channel(c);
+    const Eigen::VectorXf x0c = x0.channel(c);
+    Eigen::VectorXf& out = rhs[static_cast<size_t>(c)];
+    if (!mapped && options.beta == 0.0) {  // straight into floats: no n x 1 double
+      symmetricProduct(ops.mass(), x0c, options.alpha, out);
+      continue;
+    }
     if (mapped) {
       symmetricProduct(modulated, x0c, b);
       symmetricProduct(ops.mass(), x0c, product);
       b += options.alpha * product;
-    } else if (options.beta == 0.0) {
-      symmetricProduct(ops.mass(), x0c, b);
-      b *= options.alpha;
     } else {
       symmetricProduct(ops.mass(), x0c, b);
       symmetricProduct(ops.stiffness(), x0c, product);
       b = options.alpha * b + options.beta * product;
     }
+    out = b.col(0).cast<float>();
   }
   return rhs;
 }
@@ -189,8 +200,8 @@ Image filteredImage(const TexelGrid& grid, Image input, Image decoded, bool norm
 /// `mapsOwner`, if given, is `domain`, whose grid maps are freed once nothing reads them.
 /// Solves one channel at a time (solveEachChannel): the multigrid's level vectors and CG's work
 /// vectors hold one channel, not all; x0 exists a channel at a time, for the right-hand side
-/// and again as each channel's initial guess, so only the k right-hand sides (n x 1 each) live
-/// through the set-up.
+/// and again as each channel's initial guess, so only the k right-hand sides (n x 1 floats each)
+/// live through the set-up.
 FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
                         std::unique_ptr<TexelOperators> owned, TexelDomain* mapsOwner,
                         Image texture, std::optional<std::vector<uint8_t>> levels,
@@ -208,30 +219,32 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
                              : TexelValues(domain.grid(), texture, levels ? &*levels : nullptr);
   const BarelyCoveredNeighbours barely = barelyBound(domain, ops, options);
   const Eigen::MatrixXd barelyX0 = x0.rows(barely.unknowns);
-  // Built once the texture is held as its levels and the barely covered texels are found (their
-  // search's arrays are gone): the hierarchy is the solver's only read of the grid's maps.
-  std::optional<SystemSolver> solver(std::in_place, domain.grid(), options.solver);
-  // The grid's maps go once nothing reads them: now, or with a beta map once the right-hand
-  // side is formed (modulatedStiffness integrates the pieces of every cell again).
+  // The grid's maps go once nothing reads them: all but the texels' class and chart now (with a
+  // beta map once the right-hand side is formed: modulatedStiffness integrates the pieces of
+  // every cell again), those once the solver's hierarchy is built.
   const bool mapped = !options.betaPerCell.empty();
-  if (mapsOwner && !mapped) mapsOwner->releaseImageMaps();
-  std::vector<Eigen::MatrixXd> rhs = screenedRightHandSide(ops, x0, options);
-  if (mapsOwner && mapped) mapsOwner->releaseImageMaps();
+  if (mapsOwner && !mapped) mapsOwner->releaseImageMaps(TexelDomain::KeptMaps::ClassAndChart);
+  std::vector<Eigen::VectorXf> rhs = screenedRightHandSide(ops, x0, options);
+  if (mapsOwner && mapped) mapsOwner->releaseImageMaps(TexelDomain::KeptMaps::ClassAndChart);
   // From here on only A is needed: formed in M's storage when the operators are ours, which
   // frees S with them (`ops` is not used again).
   Eigen::SparseMatrix<double> system =
       owned ? TexelOperators::screenedSystem(std::move(owned), options.alpha)
             : ops.screenedSystem(options.alpha);
+  // Built once S is freed (the hierarchy is larger than the class and chart maps it reads, its
+  // only read of the grid), then those maps go too.
+  std::optional<SystemSolver> solver(std::in_place, domain.grid(), options.solver);
+  if (mapsOwner) mapsOwner->releaseImageMaps();
   solver->initAndUpdate(std::move(system), progress);
   FilterResult result;
   std::vector<Eigen::MatrixXd> solved(rhs.size());
   result.report = solveEachChannel(
       x0.channels(), progress, [&](int c, const ProgressCallback& channelProgress) {
         const auto k = static_cast<size_t>(c);
-        solved[k] = x0.channel(c);  // the initial guess
-        const SolveReport report = solver->solve(rhs[k], solved[k], channelProgress);
-        rhs[k] = Eigen::MatrixXd();
-        return report;
+        solved[k] = x0.channel(c).cast<double>();  // the initial guess
+        const Eigen::MatrixXd b = rhs[k].cast<double>();
+        rhs[k] = Eigen::VectorXf();
+        return solver->solve(b, solved[k], channelProgress);
       });
   result.initSeconds = solver->initSeconds();
   result.updateSeconds = solver->updateSeconds();
@@ -297,6 +310,7 @@ void InteractiveFilter::applyParameters(double alpha, double beta, std::vector<d
     symmetricProduct(ops.modulatedStiffness(betaPerCell), x0_, rhs_);
     rhs_ += alpha * massX0_;
   }
+  rhs_ = roundedRightHandSide(rhs_);
   // The system matrix depends on alpha only: painting beta changes just the right-hand side.
   if (alpha == alpha_) return;
   const bool first = alpha_ == 0.0;

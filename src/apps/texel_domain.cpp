@@ -1,6 +1,8 @@
 // TexelDomain: the atlas -> grid -> operators pipeline in one place.
 #include "texgrad/apps/texel_domain.h"
 
+#include <vector>
+
 #include "texgrad/atlas/image_coverage.h"
 #include "texgrad/core/error.h"
 
@@ -13,6 +15,9 @@ TexelDomain::TexelDomain(TexturedMesh mesh, int width, int height, const Operato
   reportProgress(progress, "atlas", 0.0);
   atlas_ = buildAtlas(mesh_);
   grid_ = buildTexelGrid(mesh_, atlas_, width, height);
+  // Nothing reads the cells' charts after the grid's classification: freed before the operators
+  // are built, whose peak is the one-shot filter's (4 bytes per image texel).
+  std::vector<int32_t>().swap(grid_.cellChart);
   if (grid_.unknownCount() == 0)
     throw InvalidInputError("the atlas covers no texel at " + std::to_string(width) + "x" +
                             std::to_string(height) + "; check the mesh's texture coordinates");
@@ -34,17 +39,18 @@ std::unique_ptr<TexelOperators> TexelDomain::releaseOperators() {
   return std::move(operators_);
 }
 
-void TexelDomain::releaseImageMaps() {
+void TexelDomain::releaseImageMaps(KeptMaps kept) {
   if (operators_)
     throw InvalidInputError(
         "TexelDomain::releaseImageMaps: the domain still holds its operators; hand them over "
         "(releaseOperators) first");
-  std::vector<TexelClass>().swap(grid_.texelClass);
-  std::vector<int32_t>().swap(grid_.texelChart);
+  if (kept == KeptMaps::None) {
+    std::vector<TexelClass>().swap(grid_.texelClass);
+    std::vector<int32_t>().swap(grid_.texelChart);
+  }
   std::vector<int32_t>().swap(grid_.unknownOfTexel);
   std::vector<int32_t>().swap(grid_.multiChartTexels);
   std::vector<CellCoverage>().swap(grid_.cellCoverage);
-  std::vector<int32_t>().swap(grid_.cellChart);
   std::vector<int32_t>().swap(grid_.overlapCells);
 }
 

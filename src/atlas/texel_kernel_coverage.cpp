@@ -19,6 +19,8 @@ namespace {
 constexpr int32_t kFacesPerTask = 256;
 /// The kernel weight a Full cell gives each of its four corner texels.
 constexpr double kFullCellShare = 0.25;
+static_assert(kFullCellShare >= kMaxBarelyCoveredFraction,
+              "a texel with a Full cell is never barely covered");
 
 /// Integrals over one piece of the four corner texels' kernels, corner k = (a + (k & 1),
 /// b + (k >> 1)) of cell (a, b).
@@ -75,6 +77,21 @@ void clipFaces(const TexturedMesh& mesh, const TexelGrid& g, int32_t begin, int3
   }
 }
 
+/// Unknowns (ascending) none of whose four footprint cells is Full.
+std::vector<int32_t> unknownsWithoutFullCells(const TexelGrid& g) {
+  std::vector<int32_t> out;
+  for (int32_t u = 0; u < g.unknownCount(); ++u) {
+    const int32_t t = g.texelOfUnknown[static_cast<size_t>(u)];
+    const int x = t % g.nx, y = t / g.nx;
+    bool full = false;
+    for (int k = 0; k < 4 && !full; ++k)
+      full = g.cellCoverage[static_cast<size_t>(g.cellIndex(x - 1 + (k & 1), y - 1 + (k >> 1)))] ==
+             CellCoverage::Full;
+    if (!full) out.push_back(u);
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<int32_t> barelyCoveredTexels(const TexturedMesh& mesh, const TexelGrid& grid,
@@ -89,23 +106,24 @@ std::vector<int32_t> barelyCoveredTexels(const TexturedMesh& mesh, const TexelGr
     clipFaces(mesh, grid, t * kFacesPerTask, std::min(faces, (t + 1) * kFacesPerTask),
               pieces[static_cast<size_t>(t)]);
   });
-  // Sums in face order (independent of the thread count); Full cells give a quarter each.
-  std::vector<double> coverage(static_cast<size_t>(grid.unknownCount()), 0.0);
+  // A Full cell gives each of its corners a quarter (kFullCellShare >= fraction), so only the
+  // texels without one can fall below `fraction`: their sums alone are formed, indexed by the
+  // ascending list of them (a few per cent of the unknowns, not a double per unknown).
+  const std::vector<int32_t> candidates = unknownsWithoutFullCells(grid);
+  std::vector<double> coverage(candidates.size(), 0.0);
   const auto addTo = [&](int x, int y, double value) {
     if (x < 0 || y < 0 || x >= grid.nx || y >= grid.ny) return;
     const int32_t u = grid.unknownOfTexel[static_cast<size_t>(grid.texelIndex(x, y))];
-    if (u >= 0) coverage[static_cast<size_t>(u)] += value;
+    const auto at = std::lower_bound(candidates.begin(), candidates.end(), u);
+    if (u >= 0 && at != candidates.end() && *at == u) coverage[at - candidates.begin()] += value;
   };
+  // Sums in face order (independent of the thread count).
   for (const std::vector<PieceKernels>& task : pieces)
     for (const PieceKernels& p : task)
       for (int k = 0; k < 4; ++k) addTo(p.cellX + (k & 1), p.cellY + (k >> 1), p.integral[k]);
-  for (int b = -1; b < grid.ny; ++b)
-    for (int a = -1; a < grid.nx; ++a)
-      if (grid.cellCoverage[static_cast<size_t>(grid.cellIndex(a, b))] == CellCoverage::Full)
-        for (int k = 0; k < 4; ++k) addTo(a + (k & 1), b + (k >> 1), kFullCellShare);
   std::vector<int32_t> barely;
-  for (int32_t u = 0; u < grid.unknownCount(); ++u)
-    if (coverage[static_cast<size_t>(u)] < fraction) barely.push_back(u);
+  for (size_t i = 0; i < candidates.size(); ++i)
+    if (coverage[i] < fraction) barely.push_back(candidates[i]);
   return barely;
 }
 

@@ -61,8 +61,13 @@ void CgOptions::validate() const {
   if (!(tolerance >= 0.0)) throw InvalidInputError("CG tolerance must be >= 0");
 }
 
-void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
-                      const Eigen::MatrixXd& x, Eigen::MatrixXd& y) {
+namespace {
+
+/// y = A x for the symmetricProduct overloads: each entry a double sum in column order, stored
+/// as store(sum).
+template <typename X, typename Y, typename Store>
+void productInto(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a, const X& x, Y& y,
+                 Store store) {
   y.resize(a.rows(), x.cols());
   const Eigen::Index k = x.cols();
   tbb::parallel_for(tbb::blocked_range<Eigen::Index>(0, a.outerSize(), 1024),
@@ -71,11 +76,28 @@ void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
       for (Eigen::Index c = 0; c < k; ++c) {
         double acc = 0.0;
         for (Eigen::Ref<const Eigen::SparseMatrix<double>>::InnerIterator it(a, j); it; ++it)
-          acc += it.value() * x(it.row(), c);
-        y(j, c) = acc;
+          acc += it.value() * static_cast<double>(x(it.row(), c));
+        y(j, c) = store(acc);
       }
     }
   });
+}
+
+}  // namespace
+
+void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
+                      const Eigen::MatrixXd& x, Eigen::MatrixXd& y) {
+  productInto(a, x, y, [](double sum) { return sum; });
+}
+
+void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
+                      const Eigen::VectorXf& x, Eigen::MatrixXd& y) {
+  productInto(a, x, y, [](double sum) { return sum; });
+}
+
+void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
+                      const Eigen::VectorXf& x, double scale, Eigen::VectorXf& y) {
+  productInto(a, x, y, [scale](double sum) { return static_cast<float>(scale * sum); });
 }
 
 template <typename Scalar>

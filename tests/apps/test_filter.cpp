@@ -16,11 +16,13 @@
 #include "texgrad/apps/normal_map.h"
 #include "texgrad/apps/seams.h"
 #include "texgrad/atlas/seam_jump.h"
+#include "texgrad/atlas/texel_grid.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/image_io.h"
 #include "texgrad/io/image_levels.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/procedural.h"
+#include "texgrad/solver/grid_hierarchy.h"
 
 namespace texgrad {
 namespace {
@@ -402,6 +404,40 @@ TEST(Filter, OperatorsHandedOverOnceAndOnlyTheDomainsAreAccepted) {
   EXPECT_THROW(static_cast<void>(domain.operators()), InvalidInputError);
   EXPECT_THROW(static_cast<void>(domain.releaseOperators()), InvalidInputError);
   EXPECT_TRUE(refused(std::move(operators), other));
+}
+
+TEST(Filter, DomainGridHasNoCellChartsAndMapsKeptForTheHierarchySuffice) {
+  // The consuming filter builds its solver's hierarchy after freeing all maps but these two.
+  TexelDomain domain(procedural::cube(3), 96, 64);
+  const TexelGrid full = domain.grid();
+  // The domain's grid is the atlas's, but for the cells' charts, freed at once.
+  const TexelGrid built = buildTexelGrid(domain.mesh(), domain.atlas(), 96, 64);
+  EXPECT_TRUE(full.cellChart.empty());
+  EXPECT_FALSE(built.cellChart.empty());
+  EXPECT_EQ(full.cellCoverage, built.cellCoverage);
+  EXPECT_EQ(full.texelChart, built.texelChart);
+  EXPECT_EQ(full.unknownOfTexel, built.unknownOfTexel);
+  domain.releaseOperators();
+  domain.releaseImageMaps(TexelDomain::KeptMaps::ClassAndChart);
+  const TexelGrid& kept = domain.grid();
+  EXPECT_TRUE(domain.hasImageMaps());
+  EXPECT_EQ(kept.texelClass, full.texelClass);
+  EXPECT_EQ(kept.texelChart, full.texelChart);
+  EXPECT_EQ(kept.texelOfUnknown, full.texelOfUnknown);
+  EXPECT_TRUE(kept.unknownOfTexel.empty());
+  EXPECT_TRUE(kept.cellCoverage.empty());
+  EXPECT_TRUE(kept.cellChart.empty());
+  const GridHierarchy expected = GridHierarchy::build(full, 8, 16);
+  const GridHierarchy fromKept = GridHierarchy::build(kept, 8, 16);
+  ASSERT_EQ(fromKept.levelCount(), expected.levelCount());
+  for (int l = 0; l < fromKept.levelCount(); ++l) {
+    EXPECT_EQ(fromKept.level(l).slotOfUnknown, expected.level(l).slotOfUnknown) << "level " << l;
+    EXPECT_EQ(fromKept.level(l).footprintInterior, expected.level(l).footprintInterior) << l;
+  }
+  domain.releaseImageMaps();
+  EXPECT_FALSE(domain.hasImageMaps());
+  EXPECT_TRUE(domain.grid().texelChart.empty());
+  EXPECT_EQ(domain.grid().texelOfUnknown, full.texelOfUnknown);
 }
 
 TEST(Filter, InactiveTexelsAreUntouched) {

@@ -76,9 +76,9 @@ FilterResult filterTexture(const TexelDomain& domain, Image texture, const Filte
 /// TexelDomain::releaseOperators) are freed once the right-hand side and the system matrix
 /// alpha M + S are formed, before the solver's set-up, so M, S and C (~190 bytes per active
 /// texel) are not held through set-up and solve. If the domain no longer holds operators, the
-/// grid's per-texel maps go too, once the solver's hierarchy exists
-/// (TexelDomain::releaseImageMaps: ~28 bytes per active texel at half coverage). Same result,
-/// bit for bit.
+/// grid's per-texel maps go too (TexelDomain::releaseImageMaps: ~20 bytes per active texel at
+/// half coverage), all but the texels' class and chart before the solver's hierarchy is built,
+/// those once it exists. Same result, bit for bit.
 FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
                            Image texture, const FilterOptions& options,
                            const ProgressCallback& progress = {});

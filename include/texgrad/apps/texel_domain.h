@@ -26,6 +26,8 @@ class TexelDomain {
 
   const TexturedMesh& mesh() const { return mesh_; }
   const Atlas& atlas() const { return atlas_; }
+  /// The texel grid, without its per-cell chart labels (cellChart is empty: only the grid's own
+  /// classification and the atlas report, which builds its own grid, read them).
   const TexelGrid& grid() const { return grid_; }
   /// The operators; throws InvalidInputError once releaseOperators() has handed them over.
   const TexelOperators& operators() const;
@@ -36,12 +38,16 @@ class TexelDomain {
   std::unique_ptr<TexelOperators> releaseOperators();
   /// False once releaseOperators() has handed the operators over.
   bool hasOperators() const { return operators_ != nullptr; }
+  /// What releaseImageMaps keeps: none of the maps, or the per-texel class and chart, which
+  /// GridHierarchy::build reads (so that a solver can still be made).
+  enum class KeptMaps { None, ClassAndChart };
   /// Frees the grid's per-texel and per-cell maps (texelClass, texelChart, unknownOfTexel,
-  /// multiChartTexels, cellCoverage, cellChart, overlapCells: about 14 bytes per image texel),
-  /// keeping its size, placement and texelOfUnknown, for a one-shot caller once nothing reads
-  /// them: filterTexture's consuming overload frees them once its solver's hierarchy exists.
-  /// Throws InvalidInputError while the domain holds its operators (they were built from them).
-  void releaseImageMaps();
+  /// multiChartTexels, cellCoverage, overlapCells: about 10 bytes per image texel)
+  /// but those `kept`, keeping its size, placement and texelOfUnknown, for a one-shot caller
+  /// once nothing reads them: filterTexture's consuming overload frees all but the class and
+  /// chart before its solver builds its hierarchy, and those after. Throws InvalidInputError
+  /// while the domain holds its operators (they were built from them).
+  void releaseImageMaps(KeptMaps kept = KeptMaps::None);
   /// False once releaseImageMaps() has freed the grid's maps.
   bool hasImageMaps() const { return !grid_.texelClass.empty(); }
   /// Number of unknowns (active texels).

@@ -109,5 +109,13 @@ CgOperator<Scalar> multigridOperator(const MultigridSolver<Scalar>& solver) {
 /// a matrix or a view on one (Eigen::Map): the Ref binds to either without a copy.
 void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
                       const Eigen::MatrixXd& x, Eigen::MatrixXd& y);
+/// y = A x (n x 1) for a float x, each value read as the double it is: the same bits as the
+/// product with x cast to double, without that n x 1 double copy.
+void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
+                      const Eigen::VectorXf& x, Eigen::MatrixXd& y);
+/// y = scale A x (n x 1) rounded to float: each value that of the double product above times
+/// `scale`, rounded once, without an n x 1 double in between.
+void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
+                      const Eigen::VectorXf& x, double scale, Eigen::VectorXf& y);
 
 }  // namespace texgrad
