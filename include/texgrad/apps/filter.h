@@ -15,7 +15,9 @@
 
 namespace texgrad {
 
-/// Parameters of the screened Poisson filter (alpha M + S) x* = (alpha M + beta S) x.
+/// Parameters of the screened Poisson filter (alpha M + S) x* = (alpha M + beta S) x. Both
+/// filters round the right-hand side to float (relative 6e-8, far below the solver's
+/// tolerance), so that the one-shot filter holds it at half the bytes and both solve alike.
 struct FilterOptions {
   /// Screening weight (paper default 1e4 on the unit-area surface): larger keeps closer to the
   /// input; smaller lets the gradient change spread further.
