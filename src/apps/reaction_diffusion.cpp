@@ -231,8 +231,10 @@ struct ReactionDiffusion::Impl {
       : domain(d),
         options(o),
         operators(owned ? nullptr : &ops),
-        solverU(d.grid(), o.solver),
-        solverV(d.grid(), o.solver) {
+        // A step runs a few cycles from the explicit target: no solver needs a double copy of
+        // its system for the refinement residuals (MatrixCopy::NotForRefinement).
+        solverU(d.grid(), o.solver, MatrixCopy::NotForRefinement),
+        solverV(d.grid(), o.solver, MatrixCopy::NotForRefinement) {
     seedState(ops, options.seed);
     const double dt = options.timeStep;
     SparseMatrixd systemU = diffusionSystem(ops, dt * options.diffusionU);

@@ -201,7 +201,16 @@ struct SystemSolver::Impl {
 
   /// True while the solves need A itself, or the caller asked for it (MatrixCopy).
   bool keepsMatrix() const {
-    return copy == MatrixCopy::Kept || !settings.cgUsesLevelZeroOperator();
+    if (copy == MatrixCopy::Kept) return true;
+    if (refinesOnLevelZero()) return false;
+    return !settings.cgUsesLevelZeroOperator();
+  }
+
+  /// True if float refinement cycles take their residuals from the level-0 operator and keep no
+  /// refinement state between solves (MatrixCopy::NotForRefinement).
+  bool refinesOnLevelZero() const {
+    return copy == MatrixCopy::NotForRefinement && settings.kind == SolverKind::Multigrid &&
+           multigridFloat != nullptr;
   }
 
   /// Takes over `from` as A; hands it to `factorise` (the direct or multigrid set-up), then frees
@@ -270,9 +279,10 @@ struct SystemSolver::Impl {
           return 0;
         });
         double change = addInPlace(x, z);
-        double rr = residual(a, b, x, r);
+        double rr = refinesOnLevelZero() ? subtractOperatorProduct(z, r) : residual(a, b, x, r);
         if (multigridFloat && divergesFrom(report.residuals.back(), std::sqrt(rr) / norm)) {
           x -= z;
+          if (!keepsMatrix()) throw Error(kDivergedWithoutMatrix);
           rr = residual(a, b, x, r);
           change = 0.0;
           useDoubleCycles();
@@ -286,11 +296,25 @@ struct SystemSolver::Impl {
           break;
         }
       }
-      remember(b, x);
+      if (refinesOnLevelZero())
+        releaseRefinementState();
+      else
+        remember(b, x);
     });
     report.times.other = secondsSince(start);
     reportSolveProgress(progress, report, count, settings.tolerance, true);
     return report;
+  }
+
+  static constexpr const char* kDivergedWithoutMatrix =
+      "float V-cycles diverged on this system (nearly singular: float rounding grows each "
+      "cycle), and the solver keeps no copy of A to change to double cycles; solve it with double "
+      "cycles (SolverSettings::singlePrecision false; CLI: --precision double)";
+
+  /// Frees r and z (the residual cache is invalid already).
+  void releaseRefinementState() {
+    r = Eigen::MatrixXd();
+    z = Eigen::MatrixXd();
   }
 
   /// A float cycle diverges when it takes the relative residual from above kDivergenceFloor to
@@ -318,7 +342,34 @@ struct SystemSolver::Impl {
     if (cacheValid && lastX.rows() == x.rows() && lastX.cols() == x.cols() &&
         lastB.cols() == b.cols() && sameValues(lastX, x))
       return shiftResidual(r, lastB, b);
-    return residual(a, b, x, r);
+    return residualOf(b, x, r);
+  }
+
+  /// out = b - A x and ||out||^2, with the kept A or else the multigrid's level-0 operator (x
+  /// rounded to the cycle precision, split into a high and a low part: residualOfDoubleIterate).
+  double residualOf(const Eigen::MatrixXd& b, const Eigen::MatrixXd& x, Eigen::MatrixXd& out) {
+    if (keepsMatrix()) return residual(a, b, x, out);
+    return visitMultigrid([&](const auto& solver) {
+      typename std::decay_t<decltype(solver)>::Matrix p, ap;
+      const auto apply = [&](const auto& in, auto& y) { solver.applyOperator(in, y); };
+      residualOfDoubleIterate(apply, b, x, out, p, ap);
+      return out.squaredNorm();
+    });
+  }
+
+  /// residualBlock -= A correction and its squared norm, with the multigrid's level-0 operator;
+  /// the correction must hold float values (a float cycle's), so one product in float with
+  /// double sums updates the residual, where a residual from scratch needs two (residualOf).
+  double subtractOperatorProduct(const Eigen::MatrixXd& correction,
+                                 Eigen::MatrixXd& residualBlock) const {
+    return visitMultigrid([&](const auto& solver) {
+      using Matrix = typename std::decay_t<decltype(solver)>::Matrix;
+      const Matrix zs = correction.cast<typename Matrix::Scalar>();
+      Matrix az;
+      solver.applyOperator(zs, az);
+      residualBlock -= az.template cast<double>();
+      return residualBlock.squaredNorm();
+    });
   }
 
   /// Keeps x, b (r is already b - A x) for initialResidual.
@@ -333,17 +384,7 @@ struct SystemSolver::Impl {
   double relativeResidual(const Eigen::MatrixXd& b, const Eigen::MatrixXd& x) {
     double rr = 0.0;
     Eigen::MatrixXd scratch;  // not r: that holds the residual step() may reuse
-    if (keepsMatrix()) {
-      arena.execute([&] { rr = residual(a, b, x, scratch); });
-    } else {
-      visitMultigrid([&](const auto& solver) {
-        typename std::decay_t<decltype(solver)>::Matrix p, ap;
-        const auto apply = [&](const auto& in, auto& out) { solver.applyOperator(in, out); };
-        residualOfDoubleIterate(apply, b, x, scratch, p, ap);
-        rr = scratch.squaredNorm();
-        return 0;
-      });
-    }
+    arena.execute([&] { rr = residualOf(b, x, scratch); });
     const double norm = b.norm();
     return norm > 0 ? std::sqrt(rr) / norm : std::sqrt(rr);
   }

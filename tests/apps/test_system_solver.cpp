@@ -228,6 +228,64 @@ TEST(SystemSolver, RvalueUpdateTakesTheMatrixOverAndConstUpdateCopiesIt) {
   }
 }
 
+TEST(SystemSolver, RefinementOnTheLevelZeroOperatorKeepsNothingAndConvergesToItsSolution) {
+  // Reaction-diffusion's shape: mass-dominated A = alpha M + S, a few cycles per solve.
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  const Eigen::SparseMatrix<double> a = p.system(1e2);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 2, 7);
+  CholmodSolver direct;
+  direct.compute(a);
+  const Eigen::MatrixXd truth = direct.solve(b);
+
+  SolverSettings settings = floatMultigrid();
+  settings.cycles = 16;
+  SystemSolver lean(p.grid, settings, MatrixCopy::NotForRefinement);
+  SystemSolver keeping(p.grid, settings);  // WhenNeeded: keeps A for the refinement residuals
+  lean.initAndUpdate(a);
+  keeping.initAndUpdate(a);
+  EXPECT_THROW(lean.matrix(), Error);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 2), y = x;
+  const SolveReport report = lean.solve(b, x);
+  keeping.solve(b, y);
+  for (int k = 1; k <= 4; ++k)
+    EXPECT_LT(report.residuals[k], 0.5 * report.residuals[k - 1]) << "cycle " << k;
+  // The residual it reports is that of the level-0 operator, which differs from A by float
+  // rounding of the couplings only: the true residual and error end near that rounding.
+  EXPECT_LT(report.residuals.back(), 1e-9) << report.toString();
+  EXPECT_LT(relativeResidual(a, b, x), 1e-6);
+  EXPECT_LT((x - truth).norm() / truth.norm(), 1e-6);
+  EXPECT_LT((y - truth).norm() / truth.norm(), 1e-9);
+  // Neither A (12 bytes per entry) nor the refinement vectors (4 n x 2 doubles) are held.
+  const int64_t withheld = a.nonZeros() * 12 + 4 * a.rows() * 2 * 8;
+  EXPECT_LE(lean.storageBytes(), keeping.storageBytes() - withheld);
+  std::cout << "level-0 residual " << report.residuals.back() << ", true "
+            << relativeResidual(a, b, x) << ", error " << (x - truth).norm() / truth.norm()
+            << " (kept A: " << (y - truth).norm() / truth.norm() << "); storage "
+            << lean.storageBytes() << " against " << keeping.storageBytes() << " bytes\n";
+  EXPECT_TRUE(lean.settings().singlePrecision);
+}
+
+TEST(SystemSolver, DivergingFloatCyclesWithoutACopyOfAThrowAndUndoTheCycle) {
+  // DivergingFloatCyclesAreUndoneAndDoubleCyclesTakeOver's system: no A to change over with.
+  const test::SyntheticProblem p = test::squareProblem(40, 1.0, 1e-7);
+  const Eigen::SparseMatrix<double> a = p.system(1e-7);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 1, 5);
+  SolverSettings settings = floatMultigrid();
+  settings.cycles = 12;
+  SystemSolver solver(p.grid, settings, MatrixCopy::NotForRefinement);
+  solver.initAndUpdate(a);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 1);
+  try {
+    solver.solve(b, x);
+    ADD_FAILURE() << "float cycles on this system diverge";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--precision double"), std::string::npos) << e.what();
+  }
+  // The first cycle diverges already (see the test above): undone, x is the initial guess.
+  EXPECT_TRUE(x.allFinite());
+  EXPECT_LE(relativeResidual(a, b, x), 1.0 + 1e-12) << "the diverging cycle is undone";
+}
+
 TEST(SystemSolver, CgOnTheLevelZeroOperatorKeepsNoCopyOfAAndMatchesCgOnA) {
   // The filter's shape: screening alpha M much smaller than S per row, a smooth target.
   const test::SyntheticProblem p = test::multiChartProblem(12);

@@ -66,7 +66,10 @@ struct ReactionDiffusionOptions {
 /// R is evaluated per texel on concentrations clamped to [0, 1] (their physical range): texels
 /// whose basis barely touches the surface have tiny mass, can overshoot in the diffusion solve,
 /// and would otherwise feed the cubic reaction term and blow up.
-/// Each species' solver is initialised and updated once, then reused every step.
+/// Each species' solver is initialised and updated once, then reused every step. The solvers keep
+/// no double copy of their systems (MatrixCopy::NotForRefinement): with float cycles, a step's
+/// refinement residuals come from the multigrid's level-0 operator, and float cycles that diverge
+/// (a time step so large that the system is nearly singular) throw Error naming double cycles.
 /// `domain` must outlive the object.
 class ReactionDiffusion {
  public:
