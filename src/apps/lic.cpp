@@ -317,13 +317,16 @@ Eigen::MatrixXd diffusionSystem(const TexelOperators& ops, std::unique_ptr<Texel
     owned->releasePieceIntegrals();
     Eigen::MatrixXd b = alpha * (owned->mass() * noise);
     const TexelOperators& h = *owned;
-    system = pinnedScreenedSystem(h, std::move(owned), alpha);
+    // Swapped in: Eigen 3.4's SparseMatrix has no move assignment, so `=` would copy it.
+    SparseMatrixd formed = pinnedScreenedSystem(h, std::move(owned), alpha);
+    system.swap(formed);
     return b;
   }
   MassStiffness h = ops.assembledFor(metric);
   Eigen::MatrixXd b = alpha * (h.mass * noise);
   const Eigen::VectorXd massDiagonal = h.mass.diagonal();
-  system = screenedSystem(std::move(h), alpha);
+  SparseMatrixd formed = screenedSystem(std::move(h), alpha);
+  system.swap(formed);
   pinNegligibleTexels(massDiagonal, alpha, system);
   return b;
 }

@@ -225,7 +225,7 @@ struct ReactionDiffusion::Impl {
   SolveReport reports[2];
 
   /// Seeds the state and sets up both solvers from `ops`; if `owned` (holding `ops`) is given,
-  /// keeps only its M once both systems are formed, before the solvers' set-up.
+  /// keeps only its M once both systems are formed, before the second solver's set-up.
   Impl(const TexelDomain& d, const ReactionDiffusionOptions& o, const TexelOperators& ops,
        std::unique_ptr<TexelOperators> owned)
       : domain(d),
@@ -237,10 +237,15 @@ struct ReactionDiffusion::Impl {
         solverV(d.grid(), o.solver, MatrixCopy::NotForRefinement) {
     seedState(ops, options.seed);
     const double dt = options.timeStep;
-    SparseMatrixd systemU = diffusionSystem(ops, dt * options.diffusionU);
+    // One system at a time: each is handed to its solver, which frees it once its level 0 is
+    // built, before the next is formed; the operators go once the last one is formed.
+    solverU.initAndUpdate(diffusionSystem(ops, dt * options.diffusionU));
     SparseMatrixd systemV = diffusionSystem(ops, dt * options.diffusionV);
-    if (owned) ownedMass = keepOnlyMass(std::move(owned));
-    solverU.initAndUpdate(std::move(systemU));
+    if (owned) {
+      // Swapped in: Eigen 3.4's SparseMatrix has no move assignment, so `=` would copy M.
+      SparseMatrixd mass = keepOnlyMass(std::move(owned));
+      ownedMass.swap(mass);
+    }
     solverV.initAndUpdate(std::move(systemV));
   }
 
