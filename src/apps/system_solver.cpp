@@ -207,10 +207,13 @@ struct SystemSolver::Impl {
   }
 
   /// True if float refinement cycles take their residuals from the level-0 operator and keep no
-  /// refinement state between solves (MatrixCopy::NotForRefinement).
+  /// refinement state between solves (MatrixCopy::NotForRefinement): not for a tolerance below
+  /// kFloatOperatorTolerance, which those residuals' float rounding would not let them reach.
   bool refinesOnLevelZero() const {
     return copy == MatrixCopy::NotForRefinement && settings.kind == SolverKind::Multigrid &&
-           multigridFloat != nullptr;
+           multigridFloat != nullptr &&
+           (settings.tolerance == 0.0 ||
+            settings.tolerance >= SolverSettings::kFloatOperatorTolerance);
   }
 
   /// Takes over `from` as A; hands it to `factorise` (the direct or multigrid set-up), then frees
@@ -268,33 +271,11 @@ struct SystemSolver::Impl {
     SolveReport report;
     const auto start = std::chrono::steady_clock::now();
     arena.execute([&] {
-      const double norm = b.norm() > 0 ? b.norm() : 1.0;
-      report.residuals.push_back(std::sqrt(startingResidual(b, x)) / norm);
-      // r now belongs to this b: a cancelled solve must not leave it to the next (remember).
-      cacheValid = false;
-      for (int k = 0; k < count; ++k) {
-        reportSolveProgress(progress, report, count, settings.tolerance);
-        visitMultigrid([&](const auto& solver) {
-          solver.precondition(r, z);
-          return 0;
-        });
-        double change = addInPlace(x, z);
-        double rr = refinesOnLevelZero() ? subtractOperatorProduct(z, r) : residual(a, b, x, r);
-        if (multigridFloat && divergesFrom(report.residuals.back(), std::sqrt(rr) / norm)) {
-          x -= z;
-          if (!keepsMatrix()) throw Error(kDivergedWithoutMatrix);
-          rr = residual(a, b, x, r);
-          change = 0.0;
-          useDoubleCycles();
-        }
-        ++report.iterations;
-        report.residuals.push_back(std::sqrt(rr) / norm);
-        report.rmsChange.push_back(
-            std::sqrt(change / static_cast<double>(std::max<Eigen::Index>(1, z.size()))));
-        if (settings.tolerance > 0 && report.residuals.back() <= settings.tolerance) {
-          report.converged = true;
-          break;
-        }
+      try {
+        cycleInPlace(b, x, count, progress, report);
+      } catch (...) {  // a cancel or a divergence: r and z go all the same
+        if (refinesOnLevelZero()) releaseRefinementState();
+        throw;
       }
       if (refinesOnLevelZero())
         releaseRefinementState();
@@ -304,6 +285,39 @@ struct SystemSolver::Impl {
     report.times.other = secondsSince(start);
     reportSolveProgress(progress, report, count, settings.tolerance, true);
     return report;
+  }
+
+  /// The cycles of refinedCycles, adding to `report`.
+  void cycleInPlace(const Eigen::MatrixXd& b, Eigen::MatrixXd& x, int count,
+                    const ProgressCallback& progress, SolveReport& report) {
+    const double norm = b.norm() > 0 ? b.norm() : 1.0;
+    report.residuals.push_back(std::sqrt(startingResidual(b, x)) / norm);
+    // r now belongs to this b: a cancelled solve must not leave it to the next (remember).
+    cacheValid = false;
+    for (int k = 0; k < count; ++k) {
+      reportSolveProgress(progress, report, count, settings.tolerance);
+      visitMultigrid([&](const auto& solver) {
+        solver.precondition(r, z);
+        return 0;
+      });
+      double change = addInPlace(x, z);
+      double rr = refinesOnLevelZero() ? subtractOperatorProduct(z, r) : residual(a, b, x, r);
+      if (multigridFloat && divergesFrom(report.residuals.back(), std::sqrt(rr) / norm)) {
+        x -= z;
+        if (!keepsMatrix()) throw Error(kDivergedWithoutMatrix);
+        rr = residual(a, b, x, r);
+        change = 0.0;
+        useDoubleCycles();
+      }
+      ++report.iterations;
+      report.residuals.push_back(std::sqrt(rr) / norm);
+      report.rmsChange.push_back(
+          std::sqrt(change / static_cast<double>(std::max<Eigen::Index>(1, z.size()))));
+      if (settings.tolerance > 0 && report.residuals.back() <= settings.tolerance) {
+        report.converged = true;
+        break;
+      }
+    }
   }
 
   static constexpr const char* kDivergedWithoutMatrix =
@@ -336,9 +350,9 @@ struct SystemSolver::Impl {
     settings.singlePrecision = false;
   }
 
-  /// initialResidual, or with refinesOnLevelZero() r = b - A x for x rounded to float first: one
-  /// product of the level-0 operator instead of residualOf's two (the guess's rounding, ~6e-8
-  /// relative, is far below what a few cycles reach).
+  /// initialResidual, or with refinesOnLevelZero() r = b - A x for x rounded to float first (in
+  /// place: the caller's guess loses its last ~6e-8 relative, far below what a few cycles reach):
+  /// one product of the level-0 operator instead of residualOf's two.
   double startingResidual(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
     if (!refinesOnLevelZero()) return initialResidual(b, x);
     x = x.cast<float>().cast<double>();
@@ -369,8 +383,9 @@ struct SystemSolver::Impl {
 
   /// residualBlock -= A correction and its squared norm, with the multigrid's level-0 operator;
   /// the correction must hold float values (a float cycle's, or a rounded guess), so one product
-  /// in float with double sums is exact in its input, where a double iterate needs two
-  /// (residualOf).
+  /// takes it exactly, where a double iterate needs two (residualOf). The product is rounded to
+  /// float (applyOperator), so each update is off by ~6e-8 of |A correction|: summed over a
+  /// solve, ~1e-7 of |b|, the accuracy these residuals reach.
   double subtractOperatorProduct(const Eigen::MatrixXd& correction,
                                  Eigen::MatrixXd& residualBlock) const {
     return visitMultigrid([&](const auto& solver) {
@@ -558,8 +573,8 @@ double SystemSolver::relativeResidual(const Eigen::MatrixXd& b, const Eigen::Mat
 const Eigen::SparseMatrix<double>& SystemSolver::matrix() const {
   if (!impl_->keepsMatrix())
     throw Error(
-        "SystemSolver::matrix: this solver keeps no copy of A (CG applies the multigrid's "
-        "level-0 operator); construct it with MatrixCopy::Kept");
+        "SystemSolver::matrix: this solver keeps no copy of A (CG or the refinement applies the "
+        "multigrid's level-0 operator); construct it with MatrixCopy::Kept");
   return impl_->a;
 }
 

@@ -23,6 +23,13 @@ double relativeResidual(const Eigen::SparseMatrix<double>& a, const Eigen::Matri
   return (b - a * x).norm() / b.norm();
 }
 
+/// A^-1 b by CHOLMOD.
+Eigen::MatrixXd directSolution(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b) {
+  CholmodSolver direct;
+  direct.compute(a);
+  return direct.solve(b);
+}
+
 SolverSettings floatMultigrid() {
   SolverSettings settings;
   settings.kind = SolverKind::Multigrid;
@@ -34,9 +41,7 @@ TEST(SystemSolver, RefineConvergesToFloatAccuracyAndReportsTheTrueResidual) {
   const test::SyntheticProblem p = test::multiChartProblem(12);
   const Eigen::SparseMatrix<double> a = p.system(1e2);
   const Eigen::MatrixXd b = test::randomBlock(a.rows(), 2, 3);
-  CholmodSolver direct;
-  direct.compute(a);
-  const Eigen::MatrixXd truth = direct.solve(b);
+  const Eigen::MatrixXd truth = directSolution(a, b);
 
   SystemSolver solver(p.grid, floatMultigrid());
   solver.initAndUpdate(a);
@@ -118,9 +123,7 @@ TEST(SystemSolver, DivergingFloatCyclesAreUndoneAndDoubleCyclesTakeOver) {
   const test::SyntheticProblem p = test::squareProblem(40, 1.0, 1e-7);
   const Eigen::SparseMatrix<double> a = p.system(1e-7);
   const Eigen::MatrixXd b = test::randomBlock(a.rows(), 1, 5);
-  CholmodSolver direct;
-  direct.compute(a);
-  const Eigen::MatrixXd truth = direct.solve(b);
+  const Eigen::MatrixXd truth = directSolution(a, b);
 
   SolverSettings settings = floatMultigrid();
   settings.cycles = 12;
@@ -233,9 +236,7 @@ TEST(SystemSolver, RefinementOnTheLevelZeroOperatorKeepsNothingAndConvergesToIts
   const test::SyntheticProblem p = test::multiChartProblem(12);
   const Eigen::SparseMatrix<double> a = p.system(1e2);
   const Eigen::MatrixXd b = test::randomBlock(a.rows(), 2, 7);
-  CholmodSolver direct;
-  direct.compute(a);
-  const Eigen::MatrixXd truth = direct.solve(b);
+  const Eigen::MatrixXd truth = directSolution(a, b);
 
   SolverSettings settings = floatMultigrid();
   settings.cycles = 16;
@@ -249,12 +250,16 @@ TEST(SystemSolver, RefinementOnTheLevelZeroOperatorKeepsNothingAndConvergesToIts
   keeping.solve(b, y);
   for (int k = 1; k <= 4; ++k)
     EXPECT_LT(report.residuals[k], 0.5 * report.residuals[k - 1]) << "cycle " << k;
-  // The residual it reports is that of the level-0 operator, which differs from A by float
-  // rounding of the couplings only: the true residual and error end near that rounding.
+  // The residual it tracks (updated by products rounded to float) falls on; the true one and
+  // the error end near the float rounding of the level-0 operator and of its products.
   EXPECT_LT(report.residuals.back(), 1e-9) << report.toString();
   EXPECT_LT(relativeResidual(a, b, x), 1e-6);
   EXPECT_LT((x - truth).norm() / truth.norm(), 1e-6);
   EXPECT_LT((y - truth).norm() / truth.norm(), 1e-9);
+  // Nothing of the first solve is carried into the next: the same solve gives the same x.
+  Eigen::MatrixXd again = Eigen::MatrixXd::Zero(a.rows(), 2);
+  lean.solve(b, again);
+  EXPECT_EQ(again, x);
   // Neither A (12 bytes per entry) nor the refinement vectors (4 n x 2 doubles) are held.
   const int64_t withheld = a.nonZeros() * 12 + 4 * a.rows() * 2 * 8;
   EXPECT_LE(lean.storageBytes(), keeping.storageBytes() - withheld);
@@ -263,6 +268,12 @@ TEST(SystemSolver, RefinementOnTheLevelZeroOperatorKeepsNothingAndConvergesToIts
             << " (kept A: " << (y - truth).norm() / truth.norm() << "); storage "
             << lean.storageBytes() << " against " << keeping.storageBytes() << " bytes\n";
   EXPECT_TRUE(lean.settings().singlePrecision);
+
+  // A tolerance below what those residuals reach: the refinement keeps A, as WhenNeeded does.
+  settings.tolerance = 1e-9;
+  SystemSolver strict(p.grid, settings, MatrixCopy::NotForRefinement);
+  strict.initAndUpdate(a);
+  EXPECT_EQ((strict.matrix() - a).norm(), 0.0);
 }
 
 TEST(SystemSolver, DivergingFloatCyclesWithoutACopyOfAThrowAndUndoTheCycle) {
@@ -295,9 +306,7 @@ TEST(SystemSolver, CgOnTheLevelZeroOperatorKeepsNoCopyOfAAndMatchesCgOnA) {
   target.col(0).setOnes();
   target.col(1) = Eigen::VectorXd::LinSpaced(n, 0.0, 1.0);
   const Eigen::MatrixXd b = p.mass * target;
-  CholmodSolver direct;
-  direct.compute(a);
-  const Eigen::MatrixXd truth = direct.solve(b);
+  const Eigen::MatrixXd truth = directSolution(a, b);
 
   SolverSettings settings;
   settings.kind = SolverKind::MultigridCg;

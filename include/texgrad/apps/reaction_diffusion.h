@@ -90,7 +90,8 @@ class ReactionDiffusion {
   /// Resets to the seeded initial state for `seed`; throws InvalidInputError if the operators
   /// were handed over to the constructor.
   void reseed(uint64_t seed);
-  /// One time step.
+  /// One time step. If v's solve throws (float cycles that diverge, see the class), u has
+  /// already taken the step and v has not; setState or reseed starts over.
   void step();
   /// `steps` time steps, reporting progress (stage "react", step counts) after every step.
   void run(int steps, const ProgressCallback& progress = {});

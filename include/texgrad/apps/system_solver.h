@@ -71,12 +71,14 @@ enum class MatrixCopy {
   /// residuals, the switch to double cycles), MultigridCg unless cgUsesLevelZeroOperator().
   WhenNeeded,
   Kept,  ///< always, for callers that read matrix()
-  /// As WhenNeeded, except for Multigrid with float cycles, which then keeps neither A nor any
-  /// refinement vector between solves: its refinement residuals go through the multigrid's
-  /// level-0 operator, so the cycles converge to the solution of that operator (A with its
-  /// interior coefficients rounded to float in difference form: ~6e-8 relative), and a float
-  /// cycle that diverges throws Error instead of switching to double cycles. For callers that
-  /// run a few cycles per solve from a new initial guess each time (reaction-diffusion's steps).
+  /// As WhenNeeded, except for Multigrid with float cycles and a tolerance of 0 or at least
+  /// kFloatOperatorTolerance, which then keeps neither A nor any refinement vector between
+  /// solves: its refinement residuals come from the multigrid's level-0 operator (A with its
+  /// interior coefficients rounded to float in difference form, products rounded to float), so
+  /// the iterate gets to ~1e-7 of |b| in residual, not to double rounding; the initial guess is
+  /// rounded to float in place; a float cycle that diverges throws Error instead of switching
+  /// to double cycles. For callers that run a few cycles per solve from a new initial guess each
+  /// time (reaction-diffusion's steps), not for repeated step() on one iterate.
   NotForRefinement,
 };
 
