@@ -394,8 +394,9 @@ void addSolverOptions(CLI::App* cmd, SolverArgs& args, const SolverSettings& def
       ->check(libraryCheck<int>(rangeText(0, Multigrid::kMaxWeakRowReach),
                                 [](Settings& s, int v) { s.multigrid.weakRowReach = v; }));
   cmd->add_option("--precision", args.precision,
-                  "float or double V-cycles (factorisations are always double; float solves "
-                  "change to double cycles if a float cycle diverges)")
+                  "float or double V-cycles (factorisations are always double; a solve whose "
+                  "float cycle diverges changes to double cycles, but react, which keeps no "
+                  "copy of its systems, stops and asks for double)")
       ->default_val(defaults.singlePrecision ? "float" : "double")
       ->check(libraryCheck<std::string>("{float,double}", [](Settings& s, std::string v) {
         s.singlePrecision = parseSinglePrecision(v);

@@ -155,9 +155,10 @@ struct GeodesicSolver::Impl {
   void solve(const ProgressCallback& progress);
   /// solve() for a one-shot Impl, with one system's solver alive at a time: the heat solve, then
   /// the heat solvers and the impulse are freed, the gradient samples built for the divergence
-  /// and the ghost penalty and freed with the heat before the distance system is set up (at spot
-  /// 2048² a solver holds ~250 MB of hierarchy besides its 244 MB copy of A, the samples 144
-  /// MB). The object can do nothing but report its results afterwards.
+  /// and the ghost penalty and freed with the heat before the distance system is set up, and
+  /// the distance solver is freed after its solve (at spot 2048² a solver holds ~250 MB of
+  /// hierarchy, the samples 144 MB). Its solvers keep no copy of A1 or A2 (systemCopy(): 244 MB
+  /// each). The object can do nothing but report its results afterwards.
   void solveOnce(const ProgressCallback& progress);
   const Eigen::MatrixXd& diffused() const { return averaged_ ? heat_ : u_; }
 
@@ -169,15 +170,23 @@ struct GeodesicSolver::Impl {
   };
   void collectNearField();
   /// Labels the connected components of the support graph of A1 (component_).
-  void labelComponents();
+  void labelComponents(const Eigen::SparseMatrix<double>& a1);
   /// Marks the unknowns in a component that holds a source (reachable_).
   void findReachable();
   /// Throws InvalidInputError naming the sources when the components their weights touch hold
   /// no texel inside the image (the output would be all +inf).
   void requireReachInImage(const std::vector<std::vector<fem::TexelWeight>>& weights,
                            const std::vector<ResolvedSource>& sources) const;
-  void buildDirichlet(const ProgressCallback& progress);
-  void updateDirichlet(const ProgressCallback& progress = {});
+  /// Marks the texels held at zero in the Dirichlet diffusion (dirichlet_) and sets averaged_.
+  void markDirichlet();
+  /// A1 with the rows and columns of the held texels reduced to their diagonal.
+  Eigen::SparseMatrix<double> dirichletSystem(const Eigen::SparseMatrix<double>& a1) const;
+  /// Forms A1, labels its components and sets up the heat solver (and the Dirichlet one when
+  /// averaged), reporting "heat setup" (and "dirichlet heat setup").
+  void setUpHeat(const ProgressCallback& progress);
+  /// What the Dirichlet and distance solvers keep of their systems: a one-shot solve keeps none
+  /// (MatrixCopy::NotForRefinement: -244 MB per system at spot 2048², docs/memory.md).
+  MatrixCopy systemCopy() const;
   /// Per component of A1's support graph: the constant to subtract from y (GeodesicOffset).
   std::vector<double> offsets() const;
   void requireSources() const;
@@ -197,7 +206,8 @@ struct GeodesicSolver::Impl {
   double scale_ = 1.0;
   std::unique_ptr<GeodesicGradients> gradients_;
   /// Each made when first set up (a SystemSolver builds its hierarchy when made, so a solver
-  /// made early would hold one before it is needed); solveOnce frees the diffusion one.
+  /// made early would hold one before it is needed); solveOnce frees the diffusion one. Only
+  /// the interactive diffusion solver keeps its system (for setAlpha and residual()).
   std::optional<SystemSolver> diffusionSolver_, distanceSolver_;
   std::unique_ptr<SystemSolver> dirichletSolver_;  ///< only with Average on meshes with boundary
   bool averaged_ = false;  ///< the heat is the mean of two diffusions (a Dirichlet solver is made)
@@ -229,24 +239,19 @@ GeodesicSolver::Impl::Impl(const TexelDomain& domain, const GeodesicOptions& opt
         options.validate();
         return options;
       }()),
-      // matrix() is read below
-      diffusionSolver_(std::in_place, domain.grid(), options.solver, MatrixCopy::Kept) {
-  oneShot_ = oneShot;
+      oneShot_(oneShot) {
   const auto start = Clock::now();
   const TexelOperators& ops = domain.operators();
   const double area = ops.report().metric.surfaceArea;
   if (!(area > 0.0)) throw InvalidInputError("the mesh has zero surface area; no distances exist");
   scale_ = std::sqrt(area);
   if (!oneShot) makeGradients();
-  // A1 and A2 live in their solvers only (SystemSolver::matrix()).
-  diffusionSolver_->initAndUpdate(heatSystem(ops, options_.alpha),
-                                  renameStage(progress, "heat setup"));
+  if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
+    markDirichlet();
+  setUpHeat(progress);
   // The cut-cell ghost penalty keeps barely covered texels from amplifying the inconsistency
   // of the normalised gradient (see Gradients::stabiliser).
   if (!oneShot) setUpDistance(gradients_->stabiliser(domain.unknowns()), progress);
-  labelComponents();
-  if (options_.boundary == GeodesicBoundary::Average && !domain.atlas().openBoundary.empty())
-    buildDirichlet(progress);
   const TexturedMesh& mesh = domain.mesh();
   vertexFaceBegin_.assign(mesh.positions.size() + 1, 0);
   for (const Triangle& t : mesh.triangles)
@@ -268,14 +273,46 @@ void GeodesicSolver::Impl::makeGradients() {
   gradients_ = std::make_unique<GeodesicGradients>(*domain_, options_.solver.multigrid.threads);
 }
 
+void GeodesicSolver::Impl::setUpHeat(const ProgressCallback& progress) {
+  const TexelGrid& grid = domain_->grid();
+  Eigen::SparseMatrix<double> a1 = heatSystem(domain_->operators(), options_.alpha);
+  labelComponents(a1);
+  Eigen::SparseMatrix<double> a1Dirichlet;
+  dirichletSolver_.reset();
+  // Solvers that keep no copy form their system again should float cycles diverge.
+  const auto heat = [this] { return heatSystem(domain_->operators(), options_.alpha); };
+  if (averaged_) {
+    a1Dirichlet = dirichletSystem(a1);
+    dirichletSolver_ = std::make_unique<SystemSolver>(grid, options_.solver, systemCopy());
+    dirichletSolver_->init(a1);  // A1's values guide the interior/boundary split, as A1's solver's
+    dirichletSolver_->formAgainWith([this, heat] { return dirichletSystem(heat()); });
+  }
+  // The interactive solver keeps A1 for setAlpha's Dirichlet system and residual().
+  diffusionSolver_.reset();
+  diffusionSolver_.emplace(grid, options_.solver, oneShot_ ? systemCopy() : MatrixCopy::Kept);
+  diffusionSolver_->initAndUpdate(std::move(a1), renameStage(progress, "heat setup"));
+  diffusionSolver_->formAgainWith(heat);
+  if (averaged_)
+    dirichletSolver_->update(std::move(a1Dirichlet), renameStage(progress, "dirichlet heat setup"));
+}
+
+MatrixCopy GeodesicSolver::Impl::systemCopy() const {
+  return oneShot_ ? MatrixCopy::NotForRefinement : MatrixCopy::WhenNeeded;
+}
+
 void GeodesicSolver::Impl::setUpDistance(const Eigen::SparseMatrix<double>& ghost,
                                          const ProgressCallback& progress) {
-  distanceSolver_.emplace(domain_->grid(), options_.solver);
+  distanceSolver_.reset();
+  distanceSolver_.emplace(domain_->grid(), options_.solver, systemCopy());
+  // Only a one-shot solver forms A2 again (the others keep it); `ghost` outlives its solve.
+  if (oneShot_)
+    distanceSolver_->formAgainWith(
+        [this, &ghost] { return distanceSystem(domain_->operators(), ghost); });
   distanceSolver_->initAndUpdate(distanceSystem(domain_->operators(), ghost),
                                  renameStage(progress, "distance setup"));
 }
 
-void GeodesicSolver::Impl::buildDirichlet(const ProgressCallback& progress) {
+void GeodesicSolver::Impl::markDirichlet() {
   const TexelGrid& grid = domain_->grid();
   const fem::TexelBasis& basis = domain_->operators().basis();
   dirichlet_.assign(static_cast<size_t>(domain_->unknowns()), 0);
@@ -298,21 +335,19 @@ void GeodesicSolver::Impl::buildDirichlet(const ProgressCallback& progress) {
     }
   }
   dirichletCount_ = static_cast<int>(std::count(dirichlet_.begin(), dirichlet_.end(), 1));
-  dirichletSolver_ = std::make_unique<SystemSolver>(grid, options_.solver);
   averaged_ = true;
-  dirichletSolver_->init(diffusionSolver_->matrix());
-  updateDirichlet(renameStage(progress, "dirichlet heat setup"));
 }
 
-void GeodesicSolver::Impl::updateDirichlet(const ProgressCallback& progress) {
+Eigen::SparseMatrix<double> GeodesicSolver::Impl::dirichletSystem(
+    const Eigen::SparseMatrix<double>& a1) const {
   // A1 with the rows and columns of held texels reduced to their diagonal: same pattern, SPD.
-  Eigen::SparseMatrix<double> a = diffusionSolver_->matrix();
+  Eigen::SparseMatrix<double> a = a1;
   for (int j = 0; j < a.outerSize(); ++j)
     for (Eigen::SparseMatrix<double>::InnerIterator it(a, j); it; ++it)
       if ((dirichlet_[static_cast<size_t>(it.row())] || dirichlet_[static_cast<size_t>(j)]) &&
           it.row() != j)
         it.valueRef() = 0.0;
-  dirichletSolver_->update(std::move(a), progress);
+  return a;
 }
 
 void GeodesicSolver::Impl::resetIterates() {
@@ -338,7 +373,7 @@ void GeodesicSolver::Impl::setAlpha(double alpha) {
   options_ = next;
   const TexelOperators& ops = domain_->operators();
   diffusionSolver_->update(heatSystem(ops, options_.alpha));
-  if (dirichletSolver_) updateDirichlet();
+  if (dirichletSolver_) dirichletSolver_->update(dirichletSystem(diffusionSolver_->matrix()));
   resetIterates();
 }
 
@@ -375,8 +410,7 @@ void GeodesicSolver::Impl::setSources(std::span<const GeodesicSource> sources) {
   resetIterates();
 }
 
-void GeodesicSolver::Impl::labelComponents() {
-  const Eigen::SparseMatrix<double>& a1 = diffusionSolver_->matrix();
+void GeodesicSolver::Impl::labelComponents(const Eigen::SparseMatrix<double>& a1) {
   const int n = static_cast<int>(a1.outerSize());
   component_.assign(static_cast<size_t>(n), -1);
   componentCount_ = 0;
@@ -653,6 +687,7 @@ void GeodesicSolver::Impl::solve(const ProgressCallback& progress) {
   requireSources();
   diffusionStep(true, progress);
   distanceStep(true, progress);
+  distanceSolver_.reset();  // and with it the reference to `ghost`
 }
 
 void GeodesicSolver::Impl::solveOnce(const ProgressCallback& progress) {
@@ -676,6 +711,7 @@ void GeodesicSolver::Impl::solveOnce(const ProgressCallback& progress) {
   y_ = Eigen::MatrixXd::Zero(n, 1);
   distances_ = Eigen::VectorXd::Zero(n);
   distanceStep(true, progress);
+  distanceSolver_.reset();  // and with it the reference to `ghost`
 }
 
 GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options,

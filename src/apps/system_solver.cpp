@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -164,6 +165,8 @@ struct SystemSolver::Impl {
   /// A of the last update while keepsMatrix(); empty otherwise (A is applied through the
   /// multigrid's level-0 stencils, row sums and boundary rows).
   Eigen::SparseMatrix<double> a;
+  /// Forms A again for the change to double cycles when a is empty (formAgainWith).
+  std::function<Eigen::SparseMatrix<double>()> formAgain;
   Eigen::Index rows = 0;  ///< of A
   double initTime = 0.0, updateTime = 0.0;
   double hierarchyTime = 0.0;  ///< of the build in the constructor, counted by the first init
@@ -304,7 +307,7 @@ struct SystemSolver::Impl {
       double rr = refinesOnLevelZero() ? subtractOperatorProduct(z, r) : residual(a, b, x, r);
       if (multigridFloat && divergesFrom(report.residuals.back(), std::sqrt(rr) / norm)) {
         x -= z;
-        if (!keepsMatrix()) throw Error(kDivergedWithoutMatrix);
+        if (!keepsMatrix()) adoptFormedAgain();
         rr = residual(a, b, x, r);
         change = 0.0;
         useDoubleCycles();
@@ -324,6 +327,17 @@ struct SystemSolver::Impl {
       "float V-cycles diverged on this system (nearly singular: float rounding grows each "
       "cycle), and the solver keeps no copy of A to change to double cycles; solve it with double "
       "cycles (SolverSettings::singlePrecision false; CLI: --precision double)";
+
+  /// Makes a the A that formAgain forms, for useDoubleCycles; throws FloatCyclesDiverged if the
+  /// caller gave no way to form it.
+  void adoptFormedAgain() {
+    if (!formAgain) throw FloatCyclesDiverged(kDivergedWithoutMatrix);
+    Eigen::SparseMatrix<double> formed = formAgain();
+    if (formed.rows() != rows || formed.cols() != rows)
+      throw Error("internal: SystemSolver::formAgainWith formed a matrix of another size");
+    a.swap(formed);
+    a.makeCompressed();
+  }
 
   /// Frees r and z (the residual cache is invalid already).
   void releaseRefinementState() {
@@ -568,6 +582,10 @@ double SystemSolver::relativeResidual(const Eigen::MatrixXd& b, const Eigen::Mat
     throw InvalidInputError("SystemSolver::relativeResidual: b and x must both be " +
                             std::to_string(impl_->rows) + " x k");
   return impl_->relativeResidual(b, x);
+}
+
+void SystemSolver::formAgainWith(std::function<Eigen::SparseMatrix<double>()> form) {
+  impl_->formAgain = std::move(form);
 }
 
 const Eigen::SparseMatrix<double>& SystemSolver::matrix() const {

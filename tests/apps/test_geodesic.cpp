@@ -281,8 +281,8 @@ TEST(Geodesic, OffsetsAndAlphaUpdates) {
 
 TEST(Geodesic, OneShotMatchesTheSolver) {
   // geodesicDistance keeps one system's solver at a time (and forms A2 only after the heat
-  // solve); the distances must be the stateful solver's, bit for bit: with Dirichlet averaging
-  // (open square) and without (closed cube-sphere), with float cycles.
+  // solve); the distances must be the stateful solver's: with Dirichlet averaging (open square)
+  // and without (closed cube-sphere), with float cycles.
   const GeodesicSource source = GeodesicSource::atPoint({0.3, 0.5, 0.8});
   for (TexturedMesh mesh : {procedural::square(1.0, 0.25), procedural::cubeSphere(8)}) {
     const TexelDomain domain(std::move(mesh), 128, 128);
@@ -291,7 +291,11 @@ TEST(Geodesic, OneShotMatchesTheSolver) {
     solver.solve();
     const GeodesicResult once = geodesicDistance(domain, {&source, 1});
     ASSERT_EQ(once.distances.size(), solver.distances().size());
-    EXPECT_TRUE((once.distances.array() == solver.distances().array()).all());
+    // Its solvers keep no copy of A1 and A2 (MatrixCopy::NotForRefinement): their residuals
+    // come from float stencils, so the distances agree to float rounding (~3e-8 of the largest
+    // distance here), not bit for bit.
+    const double largest = solver.distances().maxCoeff();
+    EXPECT_LT((once.distances - solver.distances()).cwiseAbs().maxCoeff(), 1e-6 * largest);
     EXPECT_EQ(once.distanceReport.iterations, solver.distanceReport().iterations);
     EXPECT_GT(once.timings.setup, 0.0);
   }

@@ -289,12 +289,39 @@ TEST(SystemSolver, DivergingFloatCyclesWithoutACopyOfAThrowAndUndoTheCycle) {
   try {
     solver.solve(b, x);
     ADD_FAILURE() << "float cycles on this system diverge";
-  } catch (const Error& e) {
+  } catch (const FloatCyclesDiverged& e) {
     EXPECT_NE(std::string(e.what()).find("--precision double"), std::string::npos) << e.what();
   }
   // The first cycle diverges already (see the test above): undone, x is the initial guess.
   EXPECT_TRUE(x.allFinite());
   EXPECT_LE(relativeResidual(a, b, x), 1.0 + 1e-12) << "the diverging cycle is undone";
+}
+
+TEST(SystemSolver, DivergingFloatCyclesWithoutACopyOfAChangeToDoubleCyclesOnAFormedAgain) {
+  // As above, but the caller says how to form A again: the solver changes to double cycles on
+  // it, as a solver with a copy does, and converges to CHOLMOD's solution.
+  const test::SyntheticProblem p = test::squareProblem(40, 1.0, 1e-7);
+  const Eigen::SparseMatrix<double> a = p.system(1e-7);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 1, 5);
+  SolverSettings settings = floatMultigrid();
+  settings.cycles = 12;
+  SystemSolver solver(p.grid, settings, MatrixCopy::NotForRefinement);
+  int formed = 0;
+  solver.formAgainWith([&] {
+    ++formed;
+    return a;
+  });
+  solver.initAndUpdate(Eigen::SparseMatrix<double>(a));
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 1);
+  const SolveReport report = solver.solve(b, x);
+  EXPECT_EQ(formed, 1);
+  EXPECT_FALSE(solver.settings().singlePrecision);
+  EXPECT_LT(relativeResidual(a, b, x), 1e-7);
+  const Eigen::MatrixXd truth = directSolution(a, b);
+  EXPECT_LT((x - truth).norm() / truth.norm(), 1e-4);
+  EXPECT_LE(*std::max_element(report.residuals.begin(), report.residuals.end()),
+            report.residuals.front());
+  EXPECT_EQ((solver.matrix() - a).norm(), 0.0) << "double cycles keep the A they run on";
 }
 
 TEST(SystemSolver, CgOnTheLevelZeroOperatorKeepsNoCopyOfAAndMatchesCgOnA) {

@@ -198,10 +198,12 @@ class GeodesicSolver {
 };
 
 /// One-shot heat-method distances from `sources` (at least one): the distances of GeodesicSolver
-/// + solve(), bit for bit, plus the farthest texel; reports the stages of both to `progress`,
-/// which may cancel. Holds one system's solver at a time and the gradient samples only between
-/// the two solves (spot 2048²: `texgrad geodesic` peaks at 1.29 GB, 2.13 GB when it ran the
-/// stateful solver; docs/memory.md).
+/// + solve() to float rounding (its float cycles take their refinement residuals from the
+/// multigrid's float stencils instead of a copy of each system: MatrixCopy::NotForRefinement),
+/// plus the farthest texel; reports the stages of both to `progress`, which may cancel. Holds
+/// one system's solver at a time and the gradient samples only between the two solves (spot
+/// 2048²: `texgrad geodesic` peaks at 1.13 GB, 2.13 GB when it ran the stateful solver;
+/// docs/memory.md).
 GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,
                                 const GeodesicOptions& options = {},
                                 const ProgressCallback& progress = {});

@@ -4,10 +4,12 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <functional>
 #include <memory>
 #include <string>
 
 #include "texgrad/atlas/texel_grid.h"
+#include "texgrad/core/error.h"
 #include "texgrad/solver/multigrid_solver.h"
 #include "texgrad/solver/solve_report.h"
 
@@ -65,6 +67,14 @@ struct SolverSettings {
   void validate() const;
 };
 
+/// Thrown by a solve whose float V-cycle diverged on a solver that keeps no copy of A to change
+/// to double cycles with (MatrixCopy::NotForRefinement without SystemSolver::formAgainWith);
+/// the cycle is undone first.
+class FloatCyclesDiverged : public NumericalError {
+ public:
+  using NumericalError::NumericalError;
+};
+
 /// Whether a SystemSolver keeps its own copy of A after update (SystemSolver::matrix()).
 enum class MatrixCopy {
   /// Only where its solves use it: Direct (residuals), Multigrid with float cycles (refinement
@@ -76,9 +86,11 @@ enum class MatrixCopy {
   /// solves: its refinement residuals come from the multigrid's level-0 operator (A with its
   /// interior coefficients rounded to float in difference form, products rounded to float), so
   /// the iterate gets to ~1e-7 of |b| in residual, not to double rounding; the initial guess is
-  /// rounded to float in place; a float cycle that diverges throws Error instead of switching
-  /// to double cycles. For callers that run a few cycles per solve from a new initial guess each
-  /// time (reaction-diffusion's steps), not for repeated step() on one iterate.
+  /// rounded to float in place; a float cycle that diverges is undone and, if the caller said how
+  /// to form A again (SystemSolver::formAgainWith), changes to double cycles on it for good, else
+  /// throws FloatCyclesDiverged. For callers that run a few cycles per solve from a new initial
+  /// guess each time (reaction-diffusion's steps, one-shot geodesics), not for repeated step()
+  /// on one iterate.
   NotForRefinement,
 };
 
@@ -105,6 +117,11 @@ class SystemSolver {
   /// this overload is what spares the copy. A solver that keeps no copy hands A on to the
   /// multigrid, which frees it once level 0 is built (MultigridSolver::update(a&&)).
   void update(Eigen::SparseMatrix<double>&& a, const ProgressCallback& progress = {});
+  /// For MatrixCopy::NotForRefinement: how to form the current A again, should a float cycle
+  /// diverge (the solver then keeps that A and cycles in double, as a solver with a copy does,
+  /// instead of throwing FloatCyclesDiverged). Kept until replaced; call again after an update
+  /// with a new A.
+  void formAgainWith(std::function<Eigen::SparseMatrix<double>()> form);
   /// init(a) then update(a); multigrid forms its Galerkin products once instead of twice.
   void initAndUpdate(const Eigen::SparseMatrix<double>& a, const ProgressCallback& progress = {});
   /// As initAndUpdate, taking over a's storage (see update).
