@@ -148,6 +148,8 @@ struct GeodesicSolver::Impl {
   /// are made only by solveOnce(), after the heat solve.
   Impl(const TexelDomain& domain, const GeodesicOptions& options, const ProgressCallback& progress,
        bool oneShot = false);
+  Impl(const Impl&) = delete;  // the solvers' formAgainWith lambdas hold `this`
+  Impl& operator=(const Impl&) = delete;
   void setAlpha(double alpha);
   void setSources(std::span<const GeodesicSource> sources);
   void update();
@@ -181,12 +183,14 @@ struct GeodesicSolver::Impl {
   void markDirichlet();
   /// A1 with the rows and columns of the held texels reduced to their diagonal.
   Eigen::SparseMatrix<double> dirichletSystem(const Eigen::SparseMatrix<double>& a1) const;
-  /// Forms A1, labels its components and sets up the heat solver (and the Dirichlet one when
-  /// averaged), reporting "heat setup" (and "dirichlet heat setup").
+  /// Forms A1, labels its components and sets up the heat solver (and first the Dirichlet one
+  /// when averaged), reporting "heat setup".
   void setUpHeat(const ProgressCallback& progress);
-  /// What the Dirichlet and distance solvers keep of their systems: a one-shot solve keeps none
-  /// (MatrixCopy::NotForRefinement: -244 MB per system at spot 2048², docs/memory.md).
-  MatrixCopy systemCopy() const;
+  /// Sets up the Dirichlet diffusion's solver on dirichletSystem(a1), reporting "dirichlet heat
+  /// setup".
+  void setUpDirichlet(const Eigen::SparseMatrix<double>& a1, const ProgressCallback& progress);
+  /// A1 at the current alpha.
+  Eigen::SparseMatrix<double> formHeatSystem() const;
   /// Per component of A1's support graph: the constant to subtract from y (GeodesicOffset).
   std::vector<double> offsets() const;
   void requireSources() const;
@@ -199,17 +203,23 @@ struct GeodesicSolver::Impl {
   void distanceStep(bool full, const ProgressCallback& progress = {});
   /// Sets up the distance solver on A2 with the ghost penalty `ghost` (see GeodesicSolver),
   /// reporting "distance setup".
-  void setUpDistance(const Eigen::SparseMatrix<double>& ghost, const ProgressCallback& progress);
+  void setUpDistance(Eigen::SparseMatrix<double> ghost, const ProgressCallback& progress);
 
   const TexelDomain* domain_;
   GeodesicOptions options_;
   double scale_ = 1.0;
   std::unique_ptr<GeodesicGradients> gradients_;
+  /// What the solvers keep of their systems: with float multigrid cycles (the default) nothing
+  /// (-244 MB per system at spot 2048², docs/memory.md): the refinement residuals, and
+  /// residual()'s products, come from the multigrid's level-0 operator, and a diverging float
+  /// cycle forms its system again (formAgainWith, which the solvers' lambdas capture `this`
+  /// for) and changes to double cycles. Other settings keep A as MatrixCopy::WhenNeeded says.
+  static constexpr MatrixCopy kSystemCopy = MatrixCopy::NotForRefinement;
   /// Each made when first set up (a SystemSolver builds its hierarchy when made, so a solver
-  /// made early would hold one before it is needed); solveOnce frees the diffusion one. Only
-  /// the interactive diffusion solver keeps its system (for setAlpha and residual()).
+  /// made early would hold one before it is needed); solveOnce frees the diffusion one.
   std::optional<SystemSolver> diffusionSolver_, distanceSolver_;
   std::unique_ptr<SystemSolver> dirichletSolver_;  ///< only with Average on meshes with boundary
+  Eigen::SparseMatrix<double> ghost_;              ///< the ghost penalty G of A2, to form A2 again
   bool averaged_ = false;  ///< the heat is the mean of two diffusions (a Dirichlet solver is made)
   bool oneShot_ = false;   ///< see the constructor
   std::vector<uint8_t> dirichlet_;  ///< per unknown: held at zero in the Dirichlet diffusion
@@ -274,41 +284,32 @@ void GeodesicSolver::Impl::makeGradients() {
 }
 
 void GeodesicSolver::Impl::setUpHeat(const ProgressCallback& progress) {
-  const TexelGrid& grid = domain_->grid();
-  Eigen::SparseMatrix<double> a1 = heatSystem(domain_->operators(), options_.alpha);
+  Eigen::SparseMatrix<double> a1 = formHeatSystem();
   labelComponents(a1);
-  Eigen::SparseMatrix<double> a1Dirichlet;
-  dirichletSolver_.reset();
-  // Solvers that keep no copy form their system again should float cycles diverge.
-  const auto heat = [this] { return heatSystem(domain_->operators(), options_.alpha); };
-  if (averaged_) {
-    a1Dirichlet = dirichletSystem(a1);
-    dirichletSolver_ = std::make_unique<SystemSolver>(grid, options_.solver, systemCopy());
-    dirichletSolver_->init(a1);  // A1's values guide the interior/boundary split, as A1's solver's
-    dirichletSolver_->formAgainWith([this, heat] { return dirichletSystem(heat()); });
-  }
-  // The interactive solver keeps A1 for setAlpha's Dirichlet system and residual().
-  diffusionSolver_.reset();
-  diffusionSolver_.emplace(grid, options_.solver, oneShot_ ? systemCopy() : MatrixCopy::Kept);
+  if (averaged_) setUpDirichlet(a1, progress);
+  diffusionSolver_.emplace(domain_->grid(), options_.solver, kSystemCopy);
+  diffusionSolver_->formAgainWith([this] { return formHeatSystem(); });
   diffusionSolver_->initAndUpdate(std::move(a1), renameStage(progress, "heat setup"));
-  diffusionSolver_->formAgainWith(heat);
-  if (averaged_)
-    dirichletSolver_->update(std::move(a1Dirichlet), renameStage(progress, "dirichlet heat setup"));
 }
 
-MatrixCopy GeodesicSolver::Impl::systemCopy() const {
-  return oneShot_ ? MatrixCopy::NotForRefinement : MatrixCopy::WhenNeeded;
+void GeodesicSolver::Impl::setUpDirichlet(const Eigen::SparseMatrix<double>& a1,
+                                          const ProgressCallback& progress) {
+  dirichletSolver_ = std::make_unique<SystemSolver>(domain_->grid(), options_.solver, kSystemCopy);
+  dirichletSolver_->formAgainWith([this] { return dirichletSystem(formHeatSystem()); });
+  dirichletSolver_->init(a1);  // A1's values guide the interior/boundary split, as A1's solver's
+  dirichletSolver_->update(dirichletSystem(a1), renameStage(progress, "dirichlet heat setup"));
 }
 
-void GeodesicSolver::Impl::setUpDistance(const Eigen::SparseMatrix<double>& ghost,
+Eigen::SparseMatrix<double> GeodesicSolver::Impl::formHeatSystem() const {
+  return heatSystem(domain_->operators(), options_.alpha);
+}
+
+void GeodesicSolver::Impl::setUpDistance(Eigen::SparseMatrix<double> ghost,
                                          const ProgressCallback& progress) {
-  distanceSolver_.reset();
-  distanceSolver_.emplace(domain_->grid(), options_.solver, systemCopy());
-  // Only a one-shot solver forms A2 again (the others keep it); `ghost` outlives its solve.
-  if (oneShot_)
-    distanceSolver_->formAgainWith(
-        [this, &ghost] { return distanceSystem(domain_->operators(), ghost); });
-  distanceSolver_->initAndUpdate(distanceSystem(domain_->operators(), ghost),
+  ghost_.swap(ghost);
+  distanceSolver_.emplace(domain_->grid(), options_.solver, kSystemCopy);
+  distanceSolver_->formAgainWith([this] { return distanceSystem(domain_->operators(), ghost_); });
+  distanceSolver_->initAndUpdate(distanceSystem(domain_->operators(), ghost_),
                                  renameStage(progress, "distance setup"));
 }
 
@@ -371,9 +372,9 @@ void GeodesicSolver::Impl::setAlpha(double alpha) {
   next.alpha = alpha;
   next.validate();
   options_ = next;
-  const TexelOperators& ops = domain_->operators();
-  diffusionSolver_->update(heatSystem(ops, options_.alpha));
-  if (dirichletSolver_) dirichletSolver_->update(dirichletSystem(diffusionSolver_->matrix()));
+  Eigen::SparseMatrix<double> a1 = formHeatSystem();
+  if (dirichletSolver_) dirichletSolver_->update(dirichletSystem(a1));
+  diffusionSolver_->update(std::move(a1));
   resetIterates();
 }
 
@@ -687,7 +688,6 @@ void GeodesicSolver::Impl::solve(const ProgressCallback& progress) {
   requireSources();
   diffusionStep(true, progress);
   distanceStep(true, progress);
-  distanceSolver_.reset();  // and with it the reference to `ghost`
 }
 
 void GeodesicSolver::Impl::solveOnce(const ProgressCallback& progress) {
@@ -704,14 +704,13 @@ void GeodesicSolver::Impl::solveOnce(const ProgressCallback& progress) {
   computeDivergence();
   u_ = uDirichlet_ = heat_ = Eigen::MatrixXd();
   start = Clock::now();
-  const Eigen::SparseMatrix<double> ghost = gradients_->stabiliser(n);
+  Eigen::SparseMatrix<double> ghost = gradients_->stabiliser(n);
   gradients_->releaseSamples();  // the arena stays for distanceStep
-  setUpDistance(ghost, progress);
+  setUpDistance(std::move(ghost), progress);
   timings_.setup += secondsSince(start);
   y_ = Eigen::MatrixXd::Zero(n, 1);
   distances_ = Eigen::VectorXd::Zero(n);
   distanceStep(true, progress);
-  distanceSolver_.reset();  // and with it the reference to `ghost`
 }
 
 GeodesicSolver::GeodesicSolver(const TexelDomain& domain, const GeodesicOptions& options,

@@ -297,7 +297,7 @@ TEST(SystemSolver, DivergingFloatCyclesWithoutACopyOfAThrowAndUndoTheCycle) {
   EXPECT_LE(relativeResidual(a, b, x), 1.0 + 1e-12) << "the diverging cycle is undone";
 }
 
-TEST(SystemSolver, DivergingFloatCyclesWithoutACopyOfAChangeToDoubleCyclesOnAFormedAgain) {
+TEST(SystemSolver, DivergingFloatCyclesWithoutACopyOfAChangeToDoubleCyclesOnTheSystemFormedAgain) {
   // As above, but the caller says how to form A again: the solver changes to double cycles on
   // it, as a solver with a copy does, and converges to CHOLMOD's solution.
   const test::SyntheticProblem p = test::squareProblem(40, 1.0, 1e-7);

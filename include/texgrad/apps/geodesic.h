@@ -148,7 +148,8 @@ class GeodesicSolver {
   /// float cycles, both cycles keep their iterates in float (SystemSolver::refine, no double
   /// residual), and y is moved by its offset after each cycle so its constant part stays small:
   /// A2's float rounding then limits the distances to about 1e-4 of the largest distance (RMS;
-  /// spot at 1024²), far below what an update changes while it refines; solve() is exact.
+  /// spot at 1024²), far below what an update changes while it refines; solve() refines with
+  /// residuals of A (from float stencils, to ~1e-7 of |b|, with float cycles).
   /// The heat cycle measures its residual (fused into its last sweeps); once that is below 1e-4
   /// and a cycle no longer reduces it by 10% (float rounding: more cycles would not change u),
   /// later updates skip the heat cycle and the divergence and refine only y (heatSettled()).
@@ -157,8 +158,10 @@ class GeodesicSolver {
   /// True once update() has stopped cycling on the heat (see update()); false after
   /// setSources, setAlpha and until then.
   bool heatSettled() const;
-  /// Largest relative residual ||b - A x|| / ||b|| (double) of the current heat and distance
-  /// iterates; one sparse product per system, so displays ask for it a few times a second.
+  /// Largest relative residual ||b - A x|| / ||b|| of the current heat and distance iterates,
+  /// with A x from the multigrids' float level-0 operators (the solvers keep no copy of A: ~1e-7
+  /// of |b| is its floor); two float products per system, so displays ask for it a few times a
+  /// second.
   double residual() const;
   /// Full solves: settings.cycles V-cycles (or CG / direct) on A1, then on A2, reporting stages
   /// "heat solve" (and "dirichlet heat solve") and "distance solve" with their cycle counts to
@@ -198,12 +201,10 @@ class GeodesicSolver {
 };
 
 /// One-shot heat-method distances from `sources` (at least one): the distances of GeodesicSolver
-/// + solve() to float rounding (its float cycles take their refinement residuals from the
-/// multigrid's float stencils instead of a copy of each system: MatrixCopy::NotForRefinement),
-/// plus the farthest texel; reports the stages of both to `progress`, which may cancel. Holds
-/// one system's solver at a time and the gradient samples only between the two solves (spot
-/// 2048²: `texgrad geodesic` peaks at 1.13 GB, 2.13 GB when it ran the stateful solver;
-/// docs/memory.md).
+/// + solve(), bit for bit, plus the farthest texel; reports the stages of both to `progress`,
+/// which may cancel. Holds one system's solver at a time and the gradient samples only between
+/// the two solves (spot 2048²: `texgrad geodesic` peaks at 1.12 GB, 2.13 GB when it ran the
+/// stateful solver; docs/memory.md).
 GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,
                                 const GeodesicOptions& options = {},
                                 const ProgressCallback& progress = {});

@@ -40,7 +40,8 @@ struct SolverSettings {
   /// cycles reach double-precision accuracy (CG to a tolerance of kFloatOperatorTolerance or
   /// more applies A in float, see there). If a refinement cycle makes the residual diverge
   /// (float rounding on a nearly singular A), the solver undoes it and changes to double cycles
-  /// for good (SystemSolver::settings() then says so).
+  /// for good (SystemSolver::settings() then says so); one that keeps no copy of A needs a way
+  /// to form it again for that (MatrixCopy::NotForRefinement).
   bool singlePrecision = true;
   /// V-cycles per solve (Multigrid; at least 1). MultigridCg uses maxIterations, Direct neither.
   int cycles = 6;
