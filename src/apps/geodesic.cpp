@@ -157,10 +157,9 @@ struct GeodesicSolver::Impl {
   void solve(const ProgressCallback& progress);
   /// solve() for a one-shot Impl, with one system's solver alive at a time: the heat solve, then
   /// the heat solvers and the impulse are freed, the gradient samples built for the divergence
-  /// and the ghost penalty and freed with the heat before the distance system is set up, and
-  /// the distance solver is freed after its solve (at spot 2048² a solver holds ~250 MB of
-  /// hierarchy, the samples 144 MB). Its solvers keep no copy of A1 or A2 (systemCopy(): 244 MB
-  /// each). The object can do nothing but report its results afterwards.
+  /// and the ghost penalty and freed with the heat before the distance system is set up (at
+  /// spot 2048² a solver holds ~250 MB of hierarchy, the samples 144 MB; no solver keeps its
+  /// system, see kSystemCopy). The object can do nothing but report its results afterwards.
   void solveOnce(const ProgressCallback& progress);
   const Eigen::MatrixXd& diffused() const { return averaged_ ? heat_ : u_; }
 
@@ -203,7 +202,7 @@ struct GeodesicSolver::Impl {
   void distanceStep(bool full, const ProgressCallback& progress = {});
   /// Sets up the distance solver on A2 with the ghost penalty `ghost` (see GeodesicSolver),
   /// reporting "distance setup".
-  void setUpDistance(Eigen::SparseMatrix<double> ghost, const ProgressCallback& progress);
+  void setUpDistance(Eigen::SparseMatrix<double>&& ghost, const ProgressCallback& progress);
 
   const TexelDomain* domain_;
   GeodesicOptions options_;
@@ -304,9 +303,9 @@ Eigen::SparseMatrix<double> GeodesicSolver::Impl::formHeatSystem() const {
   return heatSystem(domain_->operators(), options_.alpha);
 }
 
-void GeodesicSolver::Impl::setUpDistance(Eigen::SparseMatrix<double> ghost,
+void GeodesicSolver::Impl::setUpDistance(Eigen::SparseMatrix<double>&& ghost,
                                          const ProgressCallback& progress) {
-  ghost_.swap(ghost);
+  ghost_.swap(ghost);  // Eigen 3.4's SparseMatrix has no move constructor: a by-value copy
   distanceSolver_.emplace(domain_->grid(), options_.solver, kSystemCopy);
   distanceSolver_->formAgainWith([this] { return distanceSystem(domain_->operators(), ghost_); });
   distanceSolver_->initAndUpdate(distanceSystem(domain_->operators(), ghost_),

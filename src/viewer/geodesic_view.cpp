@@ -26,8 +26,8 @@ constexpr double kSettledRelativeChange = 1.0 / kMaxCode;
 constexpr int kUnknownsPerTask = 1 << 14;
 /// Most sources a page may place with shift-clicks.
 constexpr size_t kMaxSources = 64;
-/// Steps between residual measurements (each costs a sparse product per system, a sixth of an
-/// update; the page shows the residual a few times a second).
+/// Steps between residual measurements (each costs two products of the multigrid's level-0
+/// operator per system; the page shows the residual a few times a second).
 constexpr int kResidualEvery = 8;
 
 class GeodesicView final : public ViewerApp {

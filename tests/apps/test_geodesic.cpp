@@ -281,8 +281,8 @@ TEST(Geodesic, OffsetsAndAlphaUpdates) {
 
 TEST(Geodesic, OneShotMatchesTheSolver) {
   // geodesicDistance keeps one system's solver at a time (and forms A2 only after the heat
-  // solve); the distances must be the stateful solver's: with Dirichlet averaging (open square)
-  // and without (closed cube-sphere), with float cycles.
+  // solve); the distances must be the stateful solver's, bit for bit: with Dirichlet averaging
+  // (open square) and without (closed cube-sphere), with float cycles.
   const GeodesicSource source = GeodesicSource::atPoint({0.3, 0.5, 0.8});
   for (TexturedMesh mesh : {procedural::square(1.0, 0.25), procedural::cubeSphere(8)}) {
     const TexelDomain domain(std::move(mesh), 128, 128);
@@ -294,9 +294,17 @@ TEST(Geodesic, OneShotMatchesTheSolver) {
     EXPECT_TRUE((once.distances.array() == solver.distances().array()).all());
     EXPECT_EQ(once.distanceReport.iterations, solver.distanceReport().iterations);
     EXPECT_GT(once.timings.setup, 0.0);
-    // The stateful solver goes on after a solve: updates and residuals on its solvers.
+    // The stateful solver goes on after a solve: updates, residuals, and a new alpha whose
+    // systems (heat and Dirichlet) replace the old ones in solvers that keep no copy of them.
     solver.update();
     EXPECT_LT(solver.residual(), 1e-3);
+    GeodesicOptions other;
+    other.alpha = 2e3;
+    solver.setAlpha(other.alpha);
+    solver.solve();
+    const GeodesicResult atOther = geodesicDistance(domain, {&source, 1}, other);
+    EXPECT_TRUE((atOther.distances.array() == solver.distances().array()).all());
+    EXPECT_GT((atOther.distances - once.distances).cwiseAbs().maxCoeff(), 1e-6);
   }
 }
 

@@ -122,9 +122,10 @@ struct GeodesicResult {
 class GeodesicSolver {
  public:
   /// eps of A2 = S + eps M on the unit-area surface (well below S's first nonzero eigenvalue).
-  /// eps M is far below float rounding of S: float V-cycles on A2 converge to the double
-  /// solution only with residuals in double (solve(): iterative refinement); update() keeps y in
-  /// float and stops near 1e-4 of the largest distance (see update()).
+  /// eps M is far below float rounding of S: float V-cycles on A2 converge to its solution only
+  /// with residuals that keep it (solve(): residuals from the level-0 operator, float interior
+  /// stencils in difference form with A2's row sums); update() keeps y in float and stops near
+  /// 1e-4 of the largest distance (see update()).
   static constexpr double kDistanceScreening = 1e-5;
 
   /// Builds gradient samples and runs both solvers' init and update phases, reporting stages
@@ -158,10 +159,10 @@ class GeodesicSolver {
   /// True once update() has stopped cycling on the heat (see update()); false after
   /// setSources, setAlpha and until then.
   bool heatSettled() const;
-  /// Largest relative residual ||b - A x|| / ||b|| of the current heat and distance iterates,
-  /// with A x from the multigrids' float level-0 operators (the solvers keep no copy of A: ~1e-7
-  /// of |b| is its floor); two float products per system, so displays ask for it a few times a
-  /// second.
+  /// Largest relative residual ||b - A x|| / ||b|| of the current heat and distance iterates;
+  /// with float multigrid cycles (the solvers then keep no copy of A), A x comes from the
+  /// multigrids' float level-0 operators (two products per system; ~1e-7 of |b| is its floor).
+  /// Displays ask for it a few times a second.
   double residual() const;
   /// Full solves: settings.cycles V-cycles (or CG / direct) on A1, then on A2, reporting stages
   /// "heat solve" (and "dirichlet heat solve") and "distance solve" with their cycle counts to
@@ -203,7 +204,7 @@ class GeodesicSolver {
 /// One-shot heat-method distances from `sources` (at least one): the distances of GeodesicSolver
 /// + solve(), bit for bit, plus the farthest texel; reports the stages of both to `progress`,
 /// which may cancel. Holds one system's solver at a time and the gradient samples only between
-/// the two solves (spot 2048²: `texgrad geodesic` peaks at 1.12 GB, 2.13 GB when it ran the
+/// the two solves (spot 2048²: `texgrad geodesic` peaks at 1.10 GB, 2.13 GB when it ran the
 /// stateful solver; docs/memory.md).
 GeodesicResult geodesicDistance(const TexelDomain& domain, std::span<const GeodesicSource> sources,
                                 const GeodesicOptions& options = {},

@@ -90,8 +90,8 @@ enum class MatrixCopy {
   /// rounded to float in place; a float cycle that diverges is undone and, if the caller said how
   /// to form A again (SystemSolver::formAgainWith), changes to double cycles on it for good, else
   /// throws FloatCyclesDiverged. For callers that run a few cycles per solve from a new initial
-  /// guess each time (reaction-diffusion's steps, one-shot geodesics), not for repeated step()
-  /// on one iterate.
+  /// guess each time (reaction-diffusion's steps, geodesics' full solves; refine() never reads
+  /// A), not for repeated step() on one iterate.
   NotForRefinement,
 };
 
@@ -120,8 +120,8 @@ class SystemSolver {
   void update(Eigen::SparseMatrix<double>&& a, const ProgressCallback& progress = {});
   /// For MatrixCopy::NotForRefinement: how to form the current A again, should a float cycle
   /// diverge (the solver then keeps that A and cycles in double, as a solver with a copy does,
-  /// instead of throwing FloatCyclesDiverged). Kept until replaced; call again after an update
-  /// with a new A.
+  /// instead of throwing FloatCyclesDiverged). Kept until replaced: after an update with a new
+  /// A, `form` must form that one (call again, or let `form` read what it depends on).
   void formAgainWith(std::function<Eigen::SparseMatrix<double>()> form);
   /// init(a) then update(a); multigrid forms its Galerkin products once instead of twice.
   void initAndUpdate(const Eigen::SparseMatrix<double>& a, const ProgressCallback& progress = {});
