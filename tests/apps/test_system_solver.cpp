@@ -117,21 +117,30 @@ TEST(SystemSolver, SettingsRefuseValuesOutsideTheirRanges) {
   EXPECT_FALSE(parseSinglePrecision("double"));
 }
 
-TEST(SystemSolver, DivergingFloatCyclesAreUndoneAndDoubleCyclesTakeOver) {
-  // A square stretched about 3000:1 with screening 1e-7: A is so nearly singular that float
-  // rounding in the V-cycle's coarse corrections grows the residual by about 1e4 a cycle.
-  const test::SyntheticProblem p = test::squareProblem(40, 1.0, 1e-7);
-  const Eigen::SparseMatrix<double> a = p.system(1e-7);
-  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 1, 5);
-  const Eigen::MatrixXd truth = directSolution(a, b);
+/// A square stretched about 3000:1 with screening 1e-7: A is so nearly singular that float
+/// rounding in the V-cycle's coarse corrections grows the residual by about 1e4 a cycle. With a
+/// right-hand side and float settings of 12 cycles.
+struct DivergingProblem {
+  test::SyntheticProblem p = test::squareProblem(40, 1.0, 1e-7);
+  Eigen::SparseMatrix<double> a = p.system(1e-7);
+  Eigen::MatrixXd b = test::randomBlock(a.rows(), 1, 5);
+  SolverSettings settings = [] {
+    SolverSettings s = floatMultigrid();
+    s.cycles = 12;
+    return s;
+  }();
+};
 
-  SolverSettings settings = floatMultigrid();
-  settings.cycles = 12;
+TEST(SystemSolver, DivergingFloatCyclesAreUndoneAndDoubleCyclesTakeOver) {
+  const DivergingProblem problem;
+  const Eigen::SparseMatrix<double>& a = problem.a;
+  const Eigen::MatrixXd& b = problem.b;
+  const Eigen::MatrixXd truth = directSolution(a, b);
   // The solver reads its grid while constructed only: the double cycles take the float ones'
   // hierarchy, not the grid, which is gone by then.
   SystemSolver solver = [&] {
-    const TexelGrid grid = p.grid;
-    return SystemSolver(grid, settings);
+    const TexelGrid grid = problem.p.grid;
+    return SystemSolver(grid, problem.settings);
   }();
   solver.initAndUpdate(a);
   Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 1);
@@ -277,13 +286,11 @@ TEST(SystemSolver, RefinementOnTheLevelZeroOperatorKeepsNothingAndConvergesToIts
 }
 
 TEST(SystemSolver, DivergingFloatCyclesWithoutACopyOfAThrowAndUndoTheCycle) {
-  // DivergingFloatCyclesAreUndoneAndDoubleCyclesTakeOver's system: no A to change over with.
-  const test::SyntheticProblem p = test::squareProblem(40, 1.0, 1e-7);
-  const Eigen::SparseMatrix<double> a = p.system(1e-7);
-  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 1, 5);
-  SolverSettings settings = floatMultigrid();
-  settings.cycles = 12;
-  SystemSolver solver(p.grid, settings, MatrixCopy::NotForRefinement);
+  // No A to change over with.
+  const DivergingProblem problem;
+  const Eigen::SparseMatrix<double>& a = problem.a;
+  const Eigen::MatrixXd& b = problem.b;
+  SystemSolver solver(problem.p.grid, problem.settings, MatrixCopy::NotForRefinement);
   solver.initAndUpdate(a);
   Eigen::MatrixXd x = Eigen::MatrixXd::Zero(a.rows(), 1);
   try {
@@ -300,12 +307,10 @@ TEST(SystemSolver, DivergingFloatCyclesWithoutACopyOfAThrowAndUndoTheCycle) {
 TEST(SystemSolver, DivergingFloatCyclesWithoutACopyOfAChangeToDoubleCyclesOnTheSystemFormedAgain) {
   // As above, but the caller says how to form A again: the solver changes to double cycles on
   // it, as a solver with a copy does, and converges to CHOLMOD's solution.
-  const test::SyntheticProblem p = test::squareProblem(40, 1.0, 1e-7);
-  const Eigen::SparseMatrix<double> a = p.system(1e-7);
-  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 1, 5);
-  SolverSettings settings = floatMultigrid();
-  settings.cycles = 12;
-  SystemSolver solver(p.grid, settings, MatrixCopy::NotForRefinement);
+  const DivergingProblem problem;
+  const Eigen::SparseMatrix<double>& a = problem.a;
+  const Eigen::MatrixXd& b = problem.b;
+  SystemSolver solver(problem.p.grid, problem.settings, MatrixCopy::NotForRefinement);
   int formed = 0;
   solver.formAgainWith([&] {
     ++formed;
