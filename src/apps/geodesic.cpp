@@ -62,44 +62,16 @@ std::pair<double, double> eigenvalues(const Eigen::Matrix2d& m) {
   return {mean - radius, mean + radius};
 }
 
-/// A1 = alpha M + S (paper Eq. 5), formed on M's pattern in one copy of it. (An Eigen sum of
-/// sparse matrices grows its result by doubling: up to twice the entries' storage, 166 MB of
-/// slack per system at spot 2048², docs/memory.md.)
-Eigen::SparseMatrix<double> heatSystem(const TexelOperators& ops, double alpha) {
-  return ops.combined([alpha](Eigen::Index, Eigen::Index, double mass, double stiffness) {
-    return alpha * mass + stiffness;
-  });
+/// A1 = alpha M + S (paper Eq. 5) as a view of M and S, which a solver that keeps no copy of its
+/// system never forms (docs/memory.md).
+SparseSum heatSum(const TexelOperators& ops, double alpha) {
+  return SparseSum(alpha, ops.mass(), 1.0, ops.stiffness());
 }
 
-/// a += b where b's entries all lie in a's pattern (compressed a, sorted inner indices);
-/// otherwise a = a + b (the union of the patterns).
-void addInPattern(Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix<double>& b) {
-  const int* outer = a.outerIndexPtr();
-  const int* inner = a.innerIndexPtr();
-  std::vector<std::pair<Eigen::Index, double>> updates;  // (position in a, value of b)
-  for (int j = 0; j < b.outerSize(); ++j)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(b, j); it; ++it) {
-      const int* found =
-          std::lower_bound(inner + outer[j], inner + outer[j + 1], static_cast<int>(it.row()));
-      if (found == inner + outer[j + 1] || *found != it.row()) {
-        a = a + b;
-        return;
-      }
-      updates.emplace_back(found - inner, it.value());
-    }
-  for (const auto& [k, value] : updates) a.valuePtr()[k] += value;
-}
-
-/// A2 = S + eps M + G (see GeodesicSolver), formed as heatSystem is: S + eps M on M's
-/// pattern, then the ghost penalty G (entries on cut cells' texels, within that pattern).
-Eigen::SparseMatrix<double> distanceSystem(const TexelOperators& ops,
-                                           const Eigen::SparseMatrix<double>& ghost) {
-  Eigen::SparseMatrix<double> a =
-      ops.combined([](Eigen::Index, Eigen::Index, double mass, double stiffness) {
-        return stiffness + GeodesicSolver::kDistanceScreening * mass;
-      });
-  addInPattern(a, ghost);
-  return a;
+/// A2 = S + eps M + G (see GeodesicSolver) as a view of S, M and the ghost penalty G (entries on
+/// cut cells' texels, within M's pattern), formed only where heatSum's is.
+SparseSum distanceSum(const TexelOperators& ops, const Eigen::SparseMatrix<double>& ghost) {
+  return SparseSum(1.0, ops.stiffness(), GeodesicSolver::kDistanceScreening, ops.mass(), ghost);
 }
 
 }  // namespace
@@ -170,8 +142,9 @@ struct GeodesicSolver::Impl {
     double distance = 0.0;
   };
   void collectNearField();
-  /// Labels the connected components of the support graph of A1 (component_).
-  void labelComponents(const Eigen::SparseMatrix<double>& a1);
+  /// Labels the components of `pattern`'s support graph (M's, which A1 and A2 share) in
+  /// component_.
+  void labelComponents(const Eigen::SparseMatrix<double>& pattern);
   /// Marks the unknowns in a component that holds a source (reachable_).
   void findReachable();
   /// Throws InvalidInputError naming the sources when the components their weights touch hold
@@ -182,8 +155,8 @@ struct GeodesicSolver::Impl {
   void markDirichlet();
   /// A1 with the rows and columns of the held texels reduced to their diagonal.
   Eigen::SparseMatrix<double> dirichletSystem(const Eigen::SparseMatrix<double>& a1) const;
-  /// Forms A1, labels its components and sets up the heat solver (and first the Dirichlet one
-  /// when averaged), reporting "heat setup".
+  /// Labels A1's components and sets up the heat solver on A1 read from M and S (heatSum; first
+  /// the Dirichlet one on a formed A1, when averaged), reporting "heat setup".
   void setUpHeat(const ProgressCallback& progress);
   /// Sets up the Dirichlet diffusion's solver on dirichletSystem(a1), reporting "dirichlet heat
   /// setup".
@@ -200,8 +173,8 @@ struct GeodesicSolver::Impl {
   /// Builds gradients_ (samples of the basis gradients, on the solver's threads).
   void makeGradients();
   void distanceStep(bool full, const ProgressCallback& progress = {});
-  /// Sets up the distance solver on A2 with the ghost penalty `ghost` (see GeodesicSolver),
-  /// reporting "distance setup".
+  /// Sets up the distance solver on A2 with the ghost penalty `ghost` (see GeodesicSolver), read
+  /// from S, M and `ghost` (distanceSum); reports "distance setup".
   void setUpDistance(Eigen::SparseMatrix<double>&& ghost, const ProgressCallback& progress);
 
   const TexelDomain* domain_;
@@ -283,12 +256,13 @@ void GeodesicSolver::Impl::makeGradients() {
 }
 
 void GeodesicSolver::Impl::setUpHeat(const ProgressCallback& progress) {
-  Eigen::SparseMatrix<double> a1 = formHeatSystem();
-  labelComponents(a1);
-  if (averaged_) setUpDirichlet(a1, progress);
+  const TexelOperators& ops = domain_->operators();
+  labelComponents(ops.mass());  // A1 is on M's pattern
+  if (averaged_) setUpDirichlet(formHeatSystem(), progress);
   diffusionSolver_.emplace(domain_->grid(), options_.solver, kSystemCopy);
   diffusionSolver_->formAgainWith([this] { return formHeatSystem(); });
-  diffusionSolver_->initAndUpdate(std::move(a1), renameStage(progress, "heat setup"));
+  diffusionSolver_->initAndUpdate(heatSum(ops, options_.alpha),
+                                  renameStage(progress, "heat setup"));
 }
 
 void GeodesicSolver::Impl::setUpDirichlet(const Eigen::SparseMatrix<double>& a1,
@@ -300,15 +274,16 @@ void GeodesicSolver::Impl::setUpDirichlet(const Eigen::SparseMatrix<double>& a1,
 }
 
 Eigen::SparseMatrix<double> GeodesicSolver::Impl::formHeatSystem() const {
-  return heatSystem(domain_->operators(), options_.alpha);
+  return heatSum(domain_->operators(), options_.alpha).toMatrix();
 }
 
 void GeodesicSolver::Impl::setUpDistance(Eigen::SparseMatrix<double>&& ghost,
                                          const ProgressCallback& progress) {
   ghost_.swap(ghost);  // Eigen 3.4's SparseMatrix has no move constructor: a by-value copy
   distanceSolver_.emplace(domain_->grid(), options_.solver, kSystemCopy);
-  distanceSolver_->formAgainWith([this] { return distanceSystem(domain_->operators(), ghost_); });
-  distanceSolver_->initAndUpdate(distanceSystem(domain_->operators(), ghost_),
+  distanceSolver_->formAgainWith(
+      [this] { return distanceSum(domain_->operators(), ghost_).toMatrix(); });
+  distanceSolver_->initAndUpdate(distanceSum(domain_->operators(), ghost_),
                                  renameStage(progress, "distance setup"));
 }
 
@@ -371,9 +346,8 @@ void GeodesicSolver::Impl::setAlpha(double alpha) {
   next.alpha = alpha;
   next.validate();
   options_ = next;
-  Eigen::SparseMatrix<double> a1 = formHeatSystem();
-  if (dirichletSolver_) dirichletSolver_->update(dirichletSystem(a1));
-  diffusionSolver_->update(std::move(a1));
+  if (dirichletSolver_) dirichletSolver_->update(dirichletSystem(formHeatSystem()));
+  diffusionSolver_->update(heatSum(domain_->operators(), alpha));
   resetIterates();
 }
 
@@ -410,12 +384,12 @@ void GeodesicSolver::Impl::setSources(std::span<const GeodesicSource> sources) {
   resetIterates();
 }
 
-void GeodesicSolver::Impl::labelComponents(const Eigen::SparseMatrix<double>& a1) {
-  const int n = static_cast<int>(a1.outerSize());
+void GeodesicSolver::Impl::labelComponents(const Eigen::SparseMatrix<double>& pattern) {
+  const int n = static_cast<int>(pattern.outerSize());
   component_.assign(static_cast<size_t>(n), -1);
   componentCount_ = 0;
-  const int* outer = a1.outerIndexPtr();
-  const int* inner = a1.innerIndexPtr();
+  const int* outer = pattern.outerIndexPtr();
+  const int* inner = pattern.innerIndexPtr();
   std::vector<int32_t> queue;
   for (int seed = 0; seed < n; ++seed) {
     if (component_[static_cast<size_t>(seed)] >= 0) continue;

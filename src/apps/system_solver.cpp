@@ -232,6 +232,19 @@ struct SystemSolver::Impl {
     if (!keepsMatrix()) Eigen::SparseMatrix<double>().swap(a);
   }
 
+  /// Runs `setUp` (a MultigridSolver's update or initAndUpdate) on `view` as the new A, for
+  /// a solver that keeps no copy of A (!keepsMatrix()): nothing of A is formed or held.
+  template <typename SetUp>
+  void adoptView(const SparseSum& view, SetUp&& setUp) {
+    Eigen::SparseMatrix<double>().swap(a);
+    rows = view.rows();
+    cacheValid = false;
+    visitMultigrid([&](auto& solver) {
+      setUp(solver, view);
+      return 0;
+    });
+  }
+
   /// Runs `setUp` (a MultigridSolver's update or initAndUpdate) on the adopted A: as a view
   /// while keepsMatrix(), else handing A over, so the set-up frees it once level 0 and A^1 are
   /// built instead of holding it while the coarser levels are (docs/memory.md).
@@ -544,6 +557,31 @@ void SystemSolver::initAndUpdate(Eigen::SparseMatrix<double>&& a,
   });
   impl_->initTime = impl_->initSecondsSince(start);
   impl_->updateTime = 0.0;
+  reportProgress(progress, kSetupStage, 1.0);
+}
+
+void SystemSolver::initAndUpdate(const SparseSum& a, const ProgressCallback& progress) {
+  if (impl_->keepsMatrix()) {  // every Direct solver does
+    initAndUpdate(a.toMatrix(), progress);
+    return;
+  }
+  reportProgress(progress, kSetupStage, 0.0);
+  const auto start = std::chrono::steady_clock::now();
+  impl_->adoptView(a, [](auto& solver, const SparseSum& view) { solver.initAndUpdate(view); });
+  impl_->initTime = impl_->initSecondsSince(start);
+  impl_->updateTime = 0.0;
+  reportProgress(progress, kSetupStage, 1.0);
+}
+
+void SystemSolver::update(const SparseSum& a, const ProgressCallback& progress) {
+  if (impl_->keepsMatrix()) {
+    update(a.toMatrix(), progress);
+    return;
+  }
+  reportProgress(progress, kSetupStage, 0.0);
+  const auto start = std::chrono::steady_clock::now();
+  impl_->adoptView(a, [](auto& solver, const SparseSum& view) { solver.update(view); });
+  impl_->updateTime = secondsSince(start);
   reportProgress(progress, kSetupStage, 1.0);
 }
 

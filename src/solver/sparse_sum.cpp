@@ -1,4 +1,5 @@
-// Solver module: checks of the two-matrix view and its conversion to a matrix.
+// Solver module: checks of the view's operands, the bits of an added in-pattern matrix, and the
+// conversion to a matrix.
 #include "texgrad/solver/sparse_sum.h"
 
 #include <algorithm>
@@ -36,6 +37,44 @@ void SparseSum::addSecond(double xScale, double yScale, bool compressed, Eigen::
   xScale_ = xScale;
   yScale_ = yScale;
   y_ = values;
+}
+
+void SparseSum::addInPattern(const Eigen::SparseMatrix<double>& z) {
+  if (z.rows() != rows_ || z.cols() != rows_)
+    throw InvalidInputError("SparseSum: the added matrix is " + std::to_string(z.rows()) + " x " +
+                            std::to_string(z.cols()) + "; expected " + std::to_string(rows_) +
+                            " x " + std::to_string(rows_));
+  if (z.nonZeros() == 0) return;  // value() then reads X and Y only
+  marks_.assign(static_cast<size_t>((nonZeros() + kWordBits - 1) / kWordBits), 0);
+  addend_.reserve(static_cast<size_t>(z.nonZeros()));
+  // Column by column and row by row within a column: the entries come in pattern order, which
+  // value() relies on (a hand-made uncompressed Z might not keep it: refused).
+  int64_t previous = -1;
+  for (Eigen::Index j = 0; j < z.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(z, j); it; ++it) {
+      const int* first = inner_ + outer_[j];
+      const int* last = inner_ + outer_[j + 1];
+      const int* found = std::lower_bound(first, last, static_cast<int>(it.row()));
+      if (found == last || *found != it.row())
+        throw InvalidInputError("SparseSum: the added matrix has entry (" +
+                                std::to_string(it.row()) + ", " + std::to_string(j) +
+                                "), outside the pattern; form the sum instead");
+      const int64_t e = found - inner_;
+      if (e <= previous)
+        throw InvalidInputError(
+            "SparseSum: the added matrix's rows are not in increasing order "
+            "in column " +
+            std::to_string(j) + "; call makeCompressed()");
+      previous = e;
+      marks_[static_cast<size_t>(e / kWordBits)] |= uint64_t{1} << (e % kWordBits);
+      addend_.push_back(it.value());
+    }
+  rankBefore_.resize(marks_.size());
+  uint32_t marked = 0;
+  for (size_t w = 0; w < marks_.size(); ++w) {
+    rankBefore_[w] = marked;
+    marked += static_cast<uint32_t>(std::popcount(marks_[w]));
+  }
 }
 
 Eigen::SparseMatrix<double> SparseSum::toMatrix() const {

@@ -285,6 +285,45 @@ TEST(SystemSolver, RefinementOnTheLevelZeroOperatorKeepsNothingAndConvergesToIts
   EXPECT_EQ((strict.matrix() - a).norm(), 0.0);
 }
 
+TEST(SystemSolver, AViewOfMAndSIsSolvedAsTheFormedSystemWithoutFormingItWhereNoCopyIsKept) {
+  const test::SyntheticProblem p = test::multiChartProblem(10);
+  const Eigen::MatrixXd b = test::randomBlock(p.mass.rows(), 2, 5);
+  // A correction on the diagonal of every 5th unknown, read through the view's third operand.
+  Eigen::SparseMatrix<double> shift(p.mass.rows(), p.mass.cols());
+  for (Eigen::Index u = 0; u < shift.rows(); u += 5) shift.insert(u, u) = 40.0;
+  Eigen::SparseMatrix<double> shifted = p.system(1e3);
+  for (Eigen::Index u = 0; u < shift.rows(); u += 5) shifted.coeffRef(u, u) += 40.0;
+  for (const MatrixCopy copy : {MatrixCopy::NotForRefinement, MatrixCopy::Kept}) {
+    for (const SolverKind kind :
+         {SolverKind::Multigrid, SolverKind::MultigridCg, SolverKind::Direct}) {
+      SolverSettings settings = floatMultigrid();
+      settings.kind = kind;
+      if (kind == SolverKind::MultigridCg) settings.tolerance = 1e-6;  // CG on level 0's operator
+      SystemSolver fromView(p.grid, settings, copy), fromMatrix(p.grid, settings, copy);
+      fromView.initAndUpdate(SparseSum(1e2, p.mass, 1.0, p.stiffness));
+      fromMatrix.initAndUpdate(p.system(1e2));
+      Eigen::MatrixXd x = Eigen::MatrixXd::Zero(b.rows(), 2), y = x;
+      fromView.solve(b, x);
+      fromMatrix.solve(b, y);
+      EXPECT_EQ(x, y) << "first set-up";
+      // A numeric update from a view with a third operand, as from the formed matrix.
+      fromView.update(SparseSum(1e3, p.mass, 1.0, p.stiffness, shift));
+      fromMatrix.update(shifted);
+      fromView.solve(b, x);
+      fromMatrix.solve(b, y);
+      EXPECT_EQ(x, y) << "after an update";
+      // Only a multigrid that keeps no copy does not form A (and holds what the solver given the
+      // formed matrix holds); the others form it from the view and keep it.
+      if (copy == MatrixCopy::NotForRefinement && kind != SolverKind::Direct) {
+        EXPECT_THROW(fromView.matrix(), Error);
+        EXPECT_EQ(fromView.storageBytes(), fromMatrix.storageBytes());
+      } else {
+        EXPECT_EQ((fromView.matrix() - shifted).norm(), 0.0);
+      }
+    }
+  }
+}
+
 TEST(SystemSolver, DivergingFloatCyclesWithoutACopyOfAThrowAndUndoTheCycle) {
   // No A to change over with.
   const DivergingProblem problem;

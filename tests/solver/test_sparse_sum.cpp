@@ -1,4 +1,5 @@
-// SparseSum: the screened system alpha M + S read from M and S without being formed.
+// SparseSum: the screened system alpha M + S read from M and S without being formed, and a third
+// matrix within their pattern added through its bit marks.
 #include <gtest/gtest.h>
 
 #include "synthetic_problem.h"
@@ -60,6 +61,33 @@ TEST(SparseSum, RejectsOperandsItCannotReadTogether) {
   EXPECT_THROW(SparseSum{loose}, InvalidInputError);
   const Eigen::SparseMatrix<double> wide(3, 4);
   EXPECT_THROW(SparseSum{wide}, InvalidInputError);
+}
+
+TEST(SparseSum, AddsAMatrixWithinThePatternAsAddingItToTheFormedSumDoes) {
+  const test::SyntheticProblem p = test::multiChartProblem(8);
+  // Z on every 7th entry of the pattern (entries in most 64-entry words of the bit marks, some
+  // words with several) and on every entry of one column, with its own values.
+  Eigen::SparseMatrix<double> z(p.mass.rows(), p.mass.cols());
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Eigen::Index j = 0; j < p.mass.outerSize(); ++j)
+    for (int e = p.mass.outerIndexPtr()[j]; e < p.mass.outerIndexPtr()[j + 1]; ++e)
+      if (e % 7 == 3 || j == 5)
+        entries.emplace_back(p.mass.innerIndexPtr()[e], static_cast<int>(j), 0.25 + e);
+  z.setFromTriplets(entries.begin(), entries.end());
+  ASSERT_GT(z.nonZeros(), 64);
+  Eigen::SparseMatrix<double> formed = p.system(3.0);  // 3 M + S: add Z's entries in place
+  for (Eigen::Index j = 0; j < z.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(z, j); it; ++it)
+      formed.coeffRef(it.row(), j) += it.value();
+  const SparseSum sum(3.0, p.mass, 1.0, p.stiffness, z);
+  EXPECT_EQ(sum.nonZeros(), formed.nonZeros());
+  EXPECT_EQ(largestDifference(sum.toMatrix(), formed), 0.0);
+
+  Eigen::SparseMatrix<double> outside(p.mass.rows(), p.mass.cols());
+  outside.insert(0, p.mass.rows() - 1) = 1.0;  // an entry M does not have
+  EXPECT_THROW(SparseSum(3.0, p.mass, 1.0, p.stiffness, outside), InvalidInputError);
+  const Eigen::SparseMatrix<double> small(3, 3);
+  EXPECT_THROW(SparseSum(3.0, p.mass, 1.0, p.stiffness, small), InvalidInputError);
 }
 
 TEST(SparseSum, GalerkinProductEqualsTheOneOfTheFormedSum) {

@@ -127,6 +127,14 @@ class SystemSolver {
   void initAndUpdate(const Eigen::SparseMatrix<double>& a, const ProgressCallback& progress = {});
   /// As initAndUpdate, taking over a's storage (see update).
   void initAndUpdate(Eigen::SparseMatrix<double>&& a, const ProgressCallback& progress = {});
+  /// initAndUpdate on A read from a view (alpha M + S, say): a multigrid solver that keeps no copy
+  /// of A (see MatrixCopy) does not form it, its set-up reading the entries from the view (but
+  /// for a grid too small to coarsen, solved directly); other solvers form A
+  /// (SparseSum::toMatrix) and take it over. The view's operands need to live through the call
+  /// only.
+  void initAndUpdate(const SparseSum& a, const ProgressCallback& progress = {});
+  /// update on A read from a view, forming it only where initAndUpdate(const SparseSum&) does.
+  void update(const SparseSum& a, const ProgressCallback& progress = {});
   /// Solves A X = B (n x k), using X as the initial guess for the iterative kinds. Reports stage
   /// "solve" to `progress` before every V-cycle or CG iteration (before and after the direct
   /// solve) and at the end, with the count done and the most the settings allow

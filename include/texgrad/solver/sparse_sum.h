@@ -1,14 +1,20 @@
-// Solver module: a read-only view of a x X + y Y for two sparse matrices of one pattern, so that
-// the screened systems alpha M + S (paper §5) reach the multigrid set-up without being formed.
+// Solver module: a read-only view of a x X + y Y (+ Z) for sparse matrices of one pattern, so
+// that the screened systems alpha M + S (paper §5) reach the multigrid set-up without being formed.
 #pragma once
 
 #include <Eigen/SparseCore>
 
+#include <bit>
+#include <cstdint>
+#include <vector>
+
 namespace texgrad {
 
-/// The square matrix xScale X + yScale Y, where X and Y are compressed column-major matrices with
-/// one sparsity pattern (equal index arrays), read entry by entry and never stored. A single
-/// matrix converts implicitly (Y absent). Holds pointers: X and Y must outlive the view.
+/// The square matrix xScale X + yScale Y (+ Z), where X and Y are compressed column-major matrices
+/// with one sparsity pattern (equal index arrays), read entry by entry and never stored, and Z, if
+/// given, has its entries within that pattern (a correction on a few texels, such as the geodesic
+/// distance system's ghost penalty). A single matrix converts implicitly (Y absent). Holds
+/// pointers: X and Y must outlive the view; Z's entries are copied.
 class SparseSum {
  public:
   /// View of one compressed matrix. Throws InvalidInputError if `x` is not compressed.
@@ -26,6 +32,17 @@ class SparseSum {
     addSecond(xScale, yScale, y.isCompressed(), y.rows(), y.cols(), y.outerIndexPtr(),
               y.innerIndexPtr(), y.valuePtr());
   }
+  /// View of (xScale X + yScale Y) + Z, entry for entry the values of forming the sum and then
+  /// adding Z's stored entries to it. Z is held as a bit and a share of a rank per entry of the
+  /// pattern (3/16 byte, copied with the view) and its own values, where a formed sum takes 8
+  /// bytes per entry. Throws InvalidInputError as the two-matrix view does, or if Z is of another
+  /// size, has an entry outside the pattern or its rows out of order in a column.
+  template <typename X, typename Y>
+  SparseSum(double xScale, const X& x, double yScale, const Y& y,
+            const Eigen::SparseMatrix<double>& z)
+      : SparseSum(xScale, x, yScale, y) {
+    addInPattern(z);
+  }
 
   /// Rows (= columns).
   Eigen::Index rows() const { return rows_; }
@@ -36,7 +53,16 @@ class SparseSum {
   /// Row of each entry, as Eigen's innerIndexPtr().
   const int* inner() const { return inner_; }
   /// Value of entry e of the pattern.
-  double value(Eigen::Index e) const { return y_ ? xScale_ * x_[e] + yScale_ * y_[e] : x_[e]; }
+  double value(Eigen::Index e) const {
+    const double sum = y_ ? xScale_ * x_[e] + yScale_ * y_[e] : x_[e];
+    if (marks_.empty()) return sum;
+    const auto word = static_cast<size_t>(e / kWordBits);
+    const auto bit = static_cast<int>(e % kWordBits);
+    if (!((marks_[word] >> bit) & 1u)) return sum;
+    // Z's values are stored in pattern order: this entry's rank among the marked ones.
+    const uint64_t below = marks_[word] & ((uint64_t{1} << bit) - 1);
+    return sum + addend_[rankBefore_[word] + static_cast<size_t>(std::popcount(below))];
+  }
   /// The sum as a matrix (for the direct solver of a one-level hierarchy).
   Eigen::SparseMatrix<double> toMatrix() const;
 
@@ -45,13 +71,19 @@ class SparseSum {
             const int* inner, const double* values);
   void addSecond(double xScale, double yScale, bool compressed, Eigen::Index rows,
                  Eigen::Index cols, const int* outer, const int* inner, const double* values);
+  /// Marks Z's entries in the pattern and keeps their values (the three-operand constructor).
+  void addInPattern(const Eigen::SparseMatrix<double>& z);
 
   Eigen::Index rows_ = 0;
   const int* outer_ = nullptr;
   const int* inner_ = nullptr;
   const double* x_ = nullptr;
   const double* y_ = nullptr;  ///< null for a single matrix
+  static constexpr int kWordBits = 64;  ///< entries per word of marks_
   double xScale_ = 1.0, yScale_ = 0.0;
+  std::vector<uint64_t> marks_;       ///< bit e: Z has entry e of the pattern (empty: no entry)
+  std::vector<uint32_t> rankBefore_;  ///< per word of marks_: marked entries in the words before
+  std::vector<double> addend_;        ///< Z's values, in pattern order
 };
 
 }  // namespace texgrad
