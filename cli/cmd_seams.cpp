@@ -36,7 +36,11 @@ void runSeams(const SeamsArgs& args) {
   const TexelDomain domain(std::move(paged.mesh), texture.width, texture.height,
                            OperatorOptions::assembledOnce(), progress);
   timer.lap("operators");
-  const SeamsResult result = smoothSeams(domain, texture, mask, args.options, progress);
+  // The seam jump before is measured now: the texture's storage becomes the result's.
+  const SeamJump before =
+      args.report.json ? measureSeamJump(domain.mesh(), domain.atlas(), texture) : SeamJump{};
+  const SeamsResult result =
+      smoothSeams(domain, std::move(paged.image), mask, args.options, progress);
   timer.lap("solve");
   if (result.unanchoredTexels > 0 && !args.report.quiet)
     std::cerr << "texgrad: note: " << result.unanchoredTexels
@@ -51,7 +55,6 @@ void runSeams(const SeamsArgs& args) {
                     domain.unknowns(), timer.total());
   if (args.report.timings) timer.print();
   if (args.report.json) {
-    const SeamJump before = measureSeamJump(domain.mesh(), domain.atlas(), texture);
     const SeamJump after = measureSeamJump(domain.mesh(), domain.atlas(), result.image);
     printJson({{"command", "seams"},
                {"texels", domain.unknowns()},

@@ -141,7 +141,7 @@ py::array seams(const py::handle& target, const py::handle& texture, const py::o
   const auto domain = domainFor(target, input.image.width, input.image.height,
                                 OperatorOptions::assembledOnce(), progress);
   Image output = withProgress(progress, [&](const ProgressCallback& callback) {
-    return smoothSeams(*domain, input.image, maskImage, options, callback).image;
+    return smoothSeams(*domain, std::move(input.image), maskImage, options, callback).image;
   });
   return arrayFromImage(std::move(output), sampleTypeFrom(dtype, input.sampleType), input.planar);
 }

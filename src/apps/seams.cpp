@@ -93,14 +93,13 @@ int64_t dropUnanchored(const SparseViewd& s, std::vector<uint8_t>& candidate) {
 
 }  // namespace
 
-SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const Image& mask,
+SeamsResult smoothSeams(const TexelDomain& domain, Image texture, const Image& mask,
                         const SeamsOptions& options, const ProgressCallback& progress) {
   const TexelGrid& grid = domain.grid();
   const TexelOperators& ops = domain.operators();
   const SparseMatrixd& m = ops.mass();
   const SparseViewd s = ops.stiffness();
   SeamsResult result;
-  result.image = texture;
   std::vector<uint8_t> isFree = candidateUnknowns(domain, mask);
   result.unanchoredTexels = dropUnanchored(s, isFree);
   std::vector<int32_t> freeIndex(isFree.size(), -1);
@@ -110,8 +109,11 @@ SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const I
       result.resolved.push_back(u);
     }
   result.freeTexels = static_cast<int64_t>(result.resolved.size());
-  if (result.freeTexels == 0) return result;
-  const Eigen::MatrixXd x = gatherTexels(grid, texture);
+  if (result.freeTexels == 0) {
+    result.image = std::move(texture);
+    return result;
+  }
+  Eigen::MatrixXd x = gatherTexels(grid, texture);
   const auto nf = static_cast<Eigen::Index>(result.freeTexels);
   // Minimise x^T S x + eps (x - x0)^T M (x - x0) over the free texels with the others fixed at
   // x0: (S_FF + eps M_FF) x_F = -S_FK x_K + eps M_FF x0_F.
@@ -140,16 +142,22 @@ SeamsResult smoothSeams(const TexelDomain& domain, const Image& texture, const I
   reportProgress(progress, Progress{"solve", 0.0, 0, 1});
   const Eigen::MatrixXd xf = solveDirect(sff, rhs);
   reportProgress(progress, Progress{"solve", 1.0, 1, 1});
-  Eigen::MatrixXd solved = x;
-  for (Eigen::Index f = 0; f < nf; ++f)
-    solved.row(result.resolved[static_cast<size_t>(f)]) = xf.row(f);
+  // The solution goes into x in place (no second n x k copy); the bound reads the input values
+  // of the barely covered texels among the free ones, kept before.
+  BarelyCoveredNeighbours bound;
+  Eigen::MatrixXd barelyInput;
   if (!options.rawSolution) {
     std::vector<int32_t> barely = barelyCoveredUnknowns(domain);
     std::erase_if(barely, [&](int32_t u) { return !isFree[static_cast<size_t>(u)]; });
-    boundBarelyCovered(domain, barely, x, solved);
+    bound = barelyCoveredNeighbours(m, std::move(barely));
+    barelyInput = x(bound.unknowns, Eigen::all);
   }
-  // Fixed texels are written back with their own (unchanged) float values: bit-identical.
-  scatterTexels(grid, solved, result.image);
+  for (Eigen::Index f = 0; f < nf; ++f) x.row(result.resolved[static_cast<size_t>(f)]) = xf.row(f);
+  boundBarelyCovered(bound, barelyInput, x);
+  // Fixed texels are written back with their own (unchanged) float values: bit-identical. The
+  // input's storage becomes the result's (no second image when the caller moves it in).
+  scatterTexels(grid, x, texture);
+  result.image = std::move(texture);
   return result;
 }
 
