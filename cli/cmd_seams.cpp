@@ -36,9 +36,13 @@ void runSeams(const SeamsArgs& args) {
   const TexelDomain domain(std::move(paged.mesh), texture.width, texture.height,
                            OperatorOptions::assembledOnce(), progress);
   timer.lap("operators");
-  // The seam jump before is measured now: the texture's storage becomes the result's.
-  const SeamJump before =
-      args.report.json ? measureSeamJump(domain.mesh(), domain.atlas(), texture) : SeamJump{};
+  // --json's seam jump before is measured now, on a stage of its own: the texture's storage
+  // becomes the result's (`texture` is not read after the move below).
+  SeamJump before;
+  if (args.report.json) {
+    before = measureSeamJump(domain.mesh(), domain.atlas(), texture);
+    timer.lap("seam jump");
+  }
   const SeamsResult result =
       smoothSeams(domain, std::move(paged.image), mask, args.options, progress);
   timer.lap("solve");

@@ -38,7 +38,8 @@ struct SeamsOptions {
 /// to no fixed texel have no data to agree with and are not re-solved (unanchoredTexels). All
 /// texels not re-solved are returned bit for bit. Reports stage "solve" to `progress` before (0)
 /// and after (1) the direct solve, which cannot be cancelled while it runs. The result is written
-/// in `texture`'s storage: a caller done with the input moves it in.
+/// in `texture`'s storage: a caller done with the input moves it in (`mask` must be another
+/// image).
 SeamsResult smoothSeams(const TexelDomain& domain, Image texture, const Image& mask = {},
                         const SeamsOptions& options = {}, const ProgressCallback& progress = {});
 
