@@ -13,6 +13,8 @@ packages=(
   # bench/memory.py upscales the shared textures with oiiotool.
   openimageio-tools
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
+  # scripts/test.sh compiles its Release build through ccache, which the consumer builds reuse.
+  ccache
   libboost-dev
   # scripts/fuzz.sh: libFuzzer and the sanitizers' runtimes come with clang; seeds via Python.
   clang-14 libclang-rt-14-dev python3

@@ -60,9 +60,11 @@ library_only=(-DTEXGRAD_SOURCE_DIR="$PWD" -DTEXGRAD_BUILD_CLI=OFF -DTEXGRAD_BUIL
   -DTEXGRAD_BUILD_TESTS=OFF -DCMAKE_DISABLE_FIND_PACKAGE_CLI11=ON
   -DCMAKE_DISABLE_FIND_PACKAGE_Boost=ON)
 subdirectory="$(dirname "$build")/consumer-subdirectory"
+# BUILD's compiler launcher too (scripts/test.sh builds through ccache): then nothing compiles twice.
+launcher="$(sed -n 's/^CMAKE_CXX_COMPILER_LAUNCHER:[A-Z]*=//p' "$build/CMakeCache.txt")"
 cmake --no-warn-unused-cli -S tests/consumer -B "$subdirectory" -G Ninja \
   -DCMAKE_BUILD_TYPE=Release -DBUILD_SHARED_LIBS=ON -DTEXGRAD_WERROR=ON "${library_only[@]}" \
-  >/dev/null
+  -DCMAKE_CXX_COMPILER_LAUNCHER="$launcher" >/dev/null
 ninja -C "$subdirectory" -j"$(nproc)" >/dev/null
 ldd "$subdirectory/filter_texture" | grep -q 'libtexgrad_apps\.so'
 check subdirectory "$subdirectory/filter_texture"
