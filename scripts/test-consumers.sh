@@ -5,8 +5,9 @@
 #  (b) pkg-config on a plain g++ command line, against the same prefix;
 #  (c) add_subdirectory of this source tree from a parent that sets no C++ standard, texgrad
 #      library-only and shared: no CLI, viewer or tests, CLI11 and Boost made unfindable (so it is
-#      also the library-only build). Its compile commands equal BUILD's (Release, -Werror, and
-#      a folder beside BUILD: the same relative include paths), so ccache reuses BUILD's objects.
+#      also the library-only build). Its compile commands equal BUILD's (Release, -Werror) but for
+#      the object paths, which ccache leaves out of its hash: through BUILD's launcher (ccache in
+#      scripts/test.sh) it reuses BUILD's objects.
 # Also: a parent configured without a build type keeps none (texgrad sets one only at the top
 # level), and the installed `texgrad view` serves the installed page (when BUILD bundled it).
 # Usage: scripts/test-consumers.sh [BUILD]   (a Release build with the CLI; default build/release)
@@ -60,7 +61,7 @@ library_only=(-DTEXGRAD_SOURCE_DIR="$PWD" -DTEXGRAD_BUILD_CLI=OFF -DTEXGRAD_BUIL
   -DTEXGRAD_BUILD_TESTS=OFF -DCMAKE_DISABLE_FIND_PACKAGE_CLI11=ON
   -DCMAKE_DISABLE_FIND_PACKAGE_Boost=ON)
 subdirectory="$(dirname "$build")/consumer-subdirectory"
-# BUILD's compiler launcher too (scripts/test.sh builds through ccache): then nothing compiles twice.
+# BUILD's compiler launcher too (none if BUILD has none, whatever the environment says).
 launcher="$(sed -n 's/^CMAKE_CXX_COMPILER_LAUNCHER:[A-Z]*=//p' "$build/CMakeCache.txt")"
 cmake --no-warn-unused-cli -S tests/consumer -B "$subdirectory" -G Ninja \
   -DCMAKE_BUILD_TYPE=Release -DBUILD_SHARED_LIBS=ON -DTEXGRAD_WERROR=ON "${library_only[@]}" \

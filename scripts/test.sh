@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # One command on a fresh Debian 12 box (as root): install, build with warnings as errors, and run
-# the fast tests under AddressSanitizer+UBSan; then, in Release, the Python module's tests and
+# the fast tests under AddressSanitizer+UBSan (less five costly checks, below); then, in Release, the Python module's tests and
 # examples (pytest), the consumer builds (scripts/test-consumers.sh: an outside project against
 # the installed package by find_package, pkg-config and add_subdirectory of a library-only shared
 # build), the fuzzing of every file reader, the camera files and the viewer's message parser
@@ -23,12 +23,16 @@ echo "== sanitizer build (ASan + UBSan)"
 # -O1 keeps the sanitizer build quick to compile and its tests quick to run; tests named *Slow*
 # (full-size shared meshes) run only in the Release pass below. TEXGRAD_BUILD_VIEWER is explicit:
 # build trees configured before it meant the viewer module (it used to mean the page) cached OFF.
-# Five of GCC's UBSan checks are left out here: they took 37-47% of this build's compile time
-# (multigrid_solver.cpp 22.4 -> 11.8 s, the largest test batch 69.8 -> 43.9 s) and what they find
-# is caught otherwise: null (ASan reports the fault with its stack), object-size and
-# pointer-overflow (ASan checks every access against its object's bounds), alignment (x86 loads
-# need none; Eigen asserts its own in this NDEBUG-less build), vptr (dynamic types of the few
-# class hierarchies). The fuzz build below keeps clang's full -fsanitize=undefined.
+# Five of GCC's UBSan checks are left out here: on the two translation units measured they took
+# 37-47% of the compile time (multigrid_solver.cpp 22.4 -> 11.8 s, the largest test batch 69.8 ->
+# 43.9 s; the whole build 800 -> 521 s, its tests 459 -> 371 s). What they would find is partly
+# covered otherwise, not wholly: null (a dereference that faults, ASan reports it; a member call
+# or reference through null that does not fault goes unseen), object-size (ASan's redzones catch
+# an access just past an object, not one far beyond it), alignment (Eigen asserts the alignment
+# of its own fixed-size objects in this NDEBUG-less build), pointer-overflow and vptr (wrapping
+# pointer arithmetic and wrong dynamic types: no cover, and little risk in this code, whose only
+# class hierarchies are the viewer's apps and the error types, thrown and caught but never cast).
+# The fuzz build below keeps clang's full -fsanitize=undefined on every file reader.
 bash scripts/build.sh build/asan -DCMAKE_BUILD_TYPE=None -DCMAKE_CXX_FLAGS="-O1 -g1" \
   -DTEXGRAD_SANITIZE=ON -DTEXGRAD_SANITIZE_SKIP=vptr,null,alignment,object-size,pointer-overflow \
   -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_BENCH=OFF -DTEXGRAD_BUILD_VIEWER=ON
@@ -37,10 +41,10 @@ ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 
 echo "== release build"
 # Through ccache, so that the consumers' library-only build (scripts/test-consumers.sh, same
-# compile commands) takes its objects from this one instead of compiling them again (2.9 of
-# 44 minutes before). Depend mode: a miss compiles once, without running the preprocessor first.
-export CCACHE_DEPEND=true
-bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_VIEWER_PAGE=ON \
+# compile commands) takes its objects from this one instead of compiling them again (the
+# consumers' step took 189 s before, 29 s after). Depend mode: a miss compiles once, without
+# running the preprocessor first.
+CCACHE_DEPEND=true bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_VIEWER_PAGE=ON \
   -DTEXGRAD_E2E_TESTS=ON -DTEXGRAD_GLTF_VALIDATOR_TESTS=ON -DTEXGRAD_BUILD_PYTHON=ON \
   -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
 # The Python module: installed as the README's set-up does (python3 on PATH may be another 3.11,
@@ -53,7 +57,8 @@ TEXGRAD_BUILD_DIR=build/release PYTHONDONTWRITEBYTECODE=1 /usr/bin/python3 -m py
 echo "== consumers (install, find_package, pkg-config, add_subdirectory)"
 bash scripts/test-consumers.sh build/release
 # Fuzz every reader a user's file reaches (clang-14 libFuzzer, ASan + UBSan) for 45 s a target,
-# two at a time: 5.5 min on 2 cores, build included (329 s measured: 143 s build, no ccache).
+# two at a time: 5 min on 2 cores, build included (295 s measured: 108 s build, through ccache with
+# an empty cache).
 echo "== fuzzing (scripts/fuzz.sh)"
 bash scripts/fuzz.sh 45
 # The solver's row kernels are compiled for AVX2 and AVX-512 only without the sanitizers
