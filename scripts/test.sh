@@ -1,15 +1,16 @@
 #!/usr/bin/env bash
 # One command on a fresh Debian 12 box (as root): install, build with warnings as errors, and run
-# the fast tests under AddressSanitizer+UBSan (less five costly checks, below); then, in Release, the Python module's tests and
-# examples (pytest), the consumer builds (scripts/test-consumers.sh: an outside project against
-# the installed package by find_package, pkg-config and add_subdirectory of a library-only shared
-# build), the fuzzing of every file reader, the camera files and the viewer's message parser
-# (scripts/fuzz.sh: libFuzzer, ASan + UBSan), the solver's fast tests again (its SIMD kernels
-# exist only there), the tests too slow for the sanitizer build (named *Slow*: full-size shared
-# meshes), the malloc tests the sanitizers exclude, the glTF validator test (npm gltf-validator)
-# and the viewer page's tests, including its end-to-end tests in headless Chromium (ViewerE2E).
-# `ctest --test-dir build/release` afterwards runs the whole suite in Release. --no-label-summary
-# keeps ctest's "tests passed" summary the last thing printed (tests carry module labels).
+# the fast tests under AddressSanitizer+UBSan (less five costly checks, below); then, in Release,
+# the Python module's tests and examples (pytest), the consumer builds (scripts/test-consumers.sh:
+# an outside project against the installed package by find_package, pkg-config and add_subdirectory
+# of a library-only shared build), the fuzzing of every file reader, the camera files and the
+# viewer's message parser (scripts/fuzz.sh: libFuzzer, ASan + UBSan), the solver's fast tests again
+# (its SIMD kernels exist only there), the tests too slow for the sanitizer build (named *Slow*:
+# full-size shared meshes), the malloc tests the sanitizers exclude, the glTF validator test (npm
+# gltf-validator) and the viewer page's tests, including its end-to-end tests in headless Chromium
+# (ViewerE2E). `ctest --test-dir build/release` afterwards runs the whole suite in Release.
+# --no-label-summary keeps ctest's "tests passed" summary the last thing printed (tests carry module
+# labels).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh --viewer
@@ -44,9 +45,9 @@ echo "== release build"
 # compile commands) takes its objects from this one instead of compiling them again (the
 # consumers' step took 189 s before, 29 s after). Depend mode: a miss compiles once, without
 # running the preprocessor first.
-CCACHE_DEPEND=true bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON -DTEXGRAD_BUILD_VIEWER_PAGE=ON \
-  -DTEXGRAD_E2E_TESTS=ON -DTEXGRAD_GLTF_VALIDATOR_TESTS=ON -DTEXGRAD_BUILD_PYTHON=ON \
-  -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
+CCACHE_DEPEND=true bash scripts/build.sh build/release -DTEXGRAD_WERROR=ON \
+  -DTEXGRAD_BUILD_VIEWER_PAGE=ON -DTEXGRAD_E2E_TESTS=ON -DTEXGRAD_GLTF_VALIDATOR_TESTS=ON \
+  -DTEXGRAD_BUILD_PYTHON=ON -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
 # The Python module: installed as the README's set-up does (python3 on PATH may be another 3.11,
 # docs/python.md), then its tests and examples with pytest (module from build/release/python).
 echo "== Python module (pytest)"
