@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <optional>
+#include <limits>
 #include <string>
 
 #include "texgrad/core/error.h"
@@ -47,18 +47,22 @@ Image distanceColourMap(const TexelGrid& grid, const Eigen::VectorXd& distances,
   if (isolines < 0) throw InvalidInputError("isolines must be >= 0");
   Image image(grid.imageWidth, grid.imageHeight, 3, PixelFormat::UInt8);
   const double scale = maxDistance > 0.0 ? 1.0 / maxDistance : 0.0;
-  auto level = [&](int x, int y) -> std::optional<double> {  // distance in isoline units
-    if (x < 0 || y < 0 || x >= grid.nx || y >= grid.ny) return std::nullopt;
+  // Distance in isoline units, NaN off the grid, at an inactive texel or an unreached one (NaN,
+  // not std::optional: GCC 12 reports the optional's value as maybe uninitialised when the
+  // sanitizer build leaves UBSan's null check out).
+  auto level = [&](int x, int y) {
+    constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+    if (x < 0 || y < 0 || x >= grid.nx || y >= grid.ny) return kNone;
     const int32_t u = grid.unknownOfTexel[static_cast<size_t>(grid.texelIndex(x, y))];
-    if (u < 0) return std::nullopt;
-    if (!std::isfinite(distances[u])) return std::nullopt;
+    if (u < 0 || !std::isfinite(distances[u])) return kNone;
     return distances[u] * scale * (isolines + 1);
   };
   // Derivative of the level along one axis by central (or one-sided) differences.
-  auto slope = [&](double centre, std::optional<double> minus, std::optional<double> plus) {
-    if (minus && plus) return 0.5 * (*plus - *minus);
-    if (plus) return *plus - centre;
-    if (minus) return centre - *minus;
+  auto slope = [&](double centre, double minus, double plus) {
+    const bool hasMinus = !std::isnan(minus), hasPlus = !std::isnan(plus);
+    if (hasMinus && hasPlus) return 0.5 * (plus - minus);
+    if (hasPlus) return plus - centre;
+    if (hasMinus) return centre - minus;
     return 0.0;
   };
   tbb::parallel_for(0, grid.ny, [&](int y) {
@@ -72,7 +76,7 @@ Image distanceColourMap(const TexelGrid& grid, const Eigen::VectorXd& distances,
       }
       Eigen::Vector3d colour = viridis(distances[u] * scale);
       if (isolines > 0) {
-        const double s = *level(x, y);
+        const double s = level(x, y);
         const double gx = slope(s, level(x - 1, y), level(x + 1, y));
         const double gy = slope(s, level(x, y - 1), level(x, y + 1));
         const double nearest = std::round(s);
