@@ -162,7 +162,7 @@ void meshIssues(const TexturedMesh& m, const Atlas& atlas, const PageLayout* pag
 /// 8-connected), or nothing if the atlas has a single chart.
 std::optional<double> minGutter(const TexelGrid& g) {
   const int cw = g.nx + 1, ch = g.ny + 1;
-  std::vector<int32_t> label(g.cellChart);
+  std::vector<int32_t> label(g.cellChart.begin(), g.cellChart.end());
   std::vector<int32_t> dist(label.size(), -1);
   std::deque<int32_t> queue;
   for (size_t k = 0; k < label.size(); ++k)

@@ -26,7 +26,7 @@ void classifyCells(TexelGrid& g, const CellCover& cover) {
   }
 }
 
-void classifyTexels(TexelGrid& g, const std::vector<uint8_t>& severalChartsInCell) {
+void classifyTexels(TexelGrid& g, const PageVector<uint8_t>& severalChartsInCell) {
   const size_t texels = static_cast<size_t>(g.nx) * static_cast<size_t>(g.ny);
   g.texelClass.assign(texels, TexelClass::Inactive);
   g.texelChart.assign(texels, -1);

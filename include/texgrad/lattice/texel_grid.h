@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "texgrad/core/page_allocator.h"
+
 namespace texgrad {
 
 /// Class of a texel by how its footprint (the 2 x 2 cells around it) meets the atlas domain M.
@@ -66,7 +68,8 @@ struct TexelGrid {
   /// Cells: cell (a, b) of the grid is stored at (b + 1) * (nx + 1) + (a + 1), a in [-1, nx-1].
   /// Per cell: coverage, and the chart covering it (-1 if empty; smallest index if several).
   std::vector<CellCoverage> cellCoverage;
-  std::vector<int32_t> cellChart;
+  /// (Pages of its own: a one-shot run frees it right after the classification, docs/memory.md.)
+  PageVector<int32_t> cellChart;
   /// Cells whose covered area exceeds the cell (stacked or folded UVs: several surface points
   /// per texel), as cell indices.
   std::vector<int32_t> overlapCells;
@@ -96,14 +99,17 @@ struct TexelGrid {
   }
 };
 
-/// What the charts put into each cell of a grid, indexed like TexelGrid cells (cellIndex).
+/// What the charts put into each cell of a grid, indexed like TexelGrid cells (cellIndex). It
+/// lives only while the grid is built, so its arrays have pages of their own (PageVector): in a
+/// heap that keeps freed memory, 13 bytes per image texel would stay resident, unused, below
+/// everything allocated after them (docs/memory.md).
 struct CellCover {
   /// Per cell: area covered by the charts, in cells (above 1 where UVs stack or fold).
-  std::vector<double> area;
+  PageVector<double> area;
   /// Per cell: smallest index of a chart overlapping the cell with positive area, -1 if none.
-  std::vector<int32_t> chart;
+  PageVector<int32_t> chart;
   /// Per cell: 1 if two or more charts overlap the cell with positive area.
-  std::vector<uint8_t> severalCharts;
+  PageVector<uint8_t> severalCharts;
 
   /// An all-empty cover of `cells` cells.
   explicit CellCover(size_t cells) : area(cells, 0.0), chart(cells, -1), severalCharts(cells, 0) {}
