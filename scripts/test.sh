@@ -6,7 +6,7 @@
 # of a library-only shared build), the fuzzing of every file reader, the camera files and the
 # viewer's message parser (scripts/fuzz.sh: libFuzzer, ASan + UBSan), the solver's fast tests again
 # (its SIMD kernels exist only there), the tests too slow for the sanitizer build (named *Slow*:
-# full-size shared meshes), the malloc tests the sanitizers exclude, the glTF validator test (npm
+# full-size shared meshes), the allocator tests the sanitizers exclude, the glTF validator test (npm
 # gltf-validator) and the viewer page's tests, including its end-to-end tests in headless Chromium
 # (ViewerE2E). `ctest --test-dir build/release` afterwards runs the whole suite in Release.
 # --no-label-summary keeps ctest's "tests passed" summary the last thing printed (tests carry module
@@ -66,7 +66,8 @@ bash scripts/fuzz.sh 45
 # (src/solver/grid_kernels.h), so the solver's fast tests run again here on the kernels users get.
 ctest --test-dir build/release -j"$jobs" --output-on-failure --no-label-summary -L '^solver$'
 # The other fast tests already passed under the sanitizers above (the stricter check); running
-# them again here would add about two minutes to CI. HeapReuse's glibc-malloc tests are compiled
-# only without the sanitizers (which replace malloc), so they run here.
+# them again here would add about two minutes to CI. HeapReuse's glibc-malloc tests and
+# PageAllocator's mapped blocks exist only without the sanitizers (which replace malloc and keep
+# every block in their own heap), so they run here.
 ctest --test-dir build/release -j"$jobs" --output-on-failure --no-label-summary \
-  -R 'Slow|HeapReuse|ViewerPageUnits|ViewerE2E|GltfOutputsValidate'
+  -R 'Slow|HeapReuse|PageAllocator|ViewerPageUnits|ViewerE2E|GltfOutputsValidate'

@@ -17,7 +17,7 @@ TexelDomain::TexelDomain(TexturedMesh mesh, int width, int height, const Operato
   grid_ = buildTexelGrid(mesh_, atlas_, width, height);
   // Nothing reads the cells' charts after the grid's classification: freed before the operators
   // are built, whose peak is the one-shot filter's (4 bytes per image texel).
-  PageVector<int32_t>().swap(grid_.cellChart);
+  decltype(grid_.cellChart)().swap(grid_.cellChart);
   if (grid_.unknownCount() == 0)
     throw InvalidInputError("the atlas covers no texel at " + std::to_string(width) + "x" +
                             std::to_string(height) + "; check the mesh's texture coordinates");

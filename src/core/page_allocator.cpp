@@ -6,6 +6,7 @@
 
 #if defined(__linux__)
 #include <sys/mman.h>
+#include <unistd.h>
 #endif
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -16,29 +17,29 @@
 #endif
 #endif
 
-namespace texgrad {
-bool ownPagesAvailable() {
-#if defined(__linux__) && !defined(TEXGRAD_ASAN)
-  return true;
-#else
-  return false;
-#endif
-}
+namespace texgrad::detail {
 
 #if defined(__linux__) && !defined(TEXGRAD_ASAN)
 
 namespace {
 
-/// Length of the mapping of a block of `bytes`: whole huge pages.
+/// Length of the mapping of a block of `bytes`: whole base pages. Not whole huge pages: the last
+/// part of a huge page would be faulted in whole (up to 2 MB more resident per block).
 std::size_t mappedLength(std::size_t bytes) {
-  return (bytes + kOwnPagesMinBytes - 1) & ~(kOwnPagesMinBytes - 1);
+  const auto page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  return (bytes + page - 1) / page * page;
 }
 
 }  // namespace
 
+bool ownPagesAvailable() {
+  return true;
+}
+
 void* mapOwnPages(std::size_t bytes) {
-  // Mapped a huge page longer than needed, then trimmed to a huge-page boundary at both ends,
-  // so that every 2 MB of the block can be one huge page.
+  if (bytes > SIZE_MAX / 2) throw std::bad_alloc();
+  // Mapped a huge page longer than needed, then trimmed at both ends so that the block starts on
+  // a huge-page boundary and each of its whole 2 MB can be one huge page.
   const std::size_t length = mappedLength(bytes);
   const std::size_t over = length + kOwnPagesMinBytes;
   void* raw = mmap(nullptr, over, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
@@ -60,6 +61,10 @@ void unmapOwnPages(void* block, std::size_t bytes) noexcept {
 
 #else
 
+bool ownPagesAvailable() {
+  return false;
+}
+
 void* mapOwnPages(std::size_t) {
   throw std::bad_alloc();  // never called: ownPagesAvailable() is false
 }
@@ -68,4 +73,4 @@ void unmapOwnPages(void*, std::size_t) noexcept {}
 
 #endif
 
-}  // namespace texgrad
+}  // namespace texgrad::detail

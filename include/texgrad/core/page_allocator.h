@@ -3,28 +3,35 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
+#include <new>
 #include <vector>
 
 namespace texgrad {
 
-/// Blocks of at least this many bytes get pages of their own (the transparent huge page size).
+/// Blocks of at least this many bytes get pages of their own, starting on a multiple of it (the
+/// transparent huge page size of x86-64 and arm64 with 4 KB base pages).
 inline constexpr std::size_t kOwnPagesMinBytes = std::size_t(1) << 21;
 
-/// A fresh anonymous mapping of `bytes` bytes (zero-filled), aligned to and marked for
-/// transparent huge pages; throws std::bad_alloc if the system refuses it.
+namespace detail {
+
+/// A fresh zero-filled anonymous mapping of `bytes` bytes (rounded up to whole pages), starting
+/// on a multiple of kOwnPagesMinBytes and marked for transparent huge pages; throws
+/// std::bad_alloc if the system refuses it.
 void* mapOwnPages(std::size_t bytes);
 /// Returns a block of mapOwnPages(bytes) to the system.
 void unmapOwnPages(void* block, std::size_t bytes) noexcept;
-/// True if PageAllocator maps large blocks here (Linux without AddressSanitizer, whose heap
-/// checks the bounds of every block: there it uses the heap).
+/// True if PageAllocator maps large blocks (Linux without AddressSanitizer); elsewhere, and under
+/// AddressSanitizer (whose heap checks every block's bounds), every block comes from the heap.
 bool ownPagesAvailable();
 
-/// Allocator whose blocks of kOwnPagesMinBytes and more are mapOwnPages blocks, unmapped when
-/// freed; smaller ones come from the heap. For a large array that lives only while longer-lived
-/// data are allocated around it (the grid's cell cover): from a heap that keeps freed memory for
-/// reuse (reuseFreedMemory) it would leave a hole as large as itself, resident and often unused
-/// through the peak (docs/memory.md).
+}  // namespace detail
+
+/// Allocator whose blocks of kOwnPagesMinBytes and more are pages of their own, unmapped when
+/// freed, and smaller ones heap blocks: for a large array that lives only while longer-lived
+/// data are allocated around it (the grid's cell cover), which a heap that keeps freed memory
+/// for reuse (reuseFreedMemory) would leave behind as a resident hole (docs/memory.md).
 template <typename T>
 struct PageAllocator {
   using value_type = T;
@@ -34,19 +41,21 @@ struct PageAllocator {
 
   /// Storage for n objects.
   T* allocate(std::size_t n) {
+    if (n > SIZE_MAX / sizeof(T)) throw std::bad_array_new_length();
     const std::size_t bytes = n * sizeof(T);
-    if (bytes >= kOwnPagesMinBytes && ownPagesAvailable())
-      return static_cast<T*>(mapOwnPages(bytes));
+    if (bytes >= kOwnPagesMinBytes && detail::ownPagesAvailable())
+      return static_cast<T*>(detail::mapOwnPages(bytes));
     return std::allocator<T>().allocate(n);
   }
   /// Frees storage of allocate(n).
   void deallocate(T* p, std::size_t n) noexcept {
     const std::size_t bytes = n * sizeof(T);
-    if (bytes >= kOwnPagesMinBytes && ownPagesAvailable())
-      unmapOwnPages(p, bytes);
+    if (bytes >= kOwnPagesMinBytes && detail::ownPagesAvailable())
+      detail::unmapOwnPages(p, bytes);
     else
       std::allocator<T>().deallocate(p, n);
   }
+  /// Every PageAllocator frees what any other allocated (it holds no state).
   template <typename U>
   bool operator==(const PageAllocator<U>&) const noexcept {
     return true;
