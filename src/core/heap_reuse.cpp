@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "texgrad/core/page_allocator.h"
+
 #if defined(__GLIBC__)
 #include <malloc.h>
 #include <sys/mman.h>
@@ -16,9 +18,6 @@ namespace texgrad {
 namespace {
 
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
-/// Transparent huge pages are 2 MB on x86-64 and arm64 (4 KB base pages).
-constexpr uintptr_t kHugePage = uintptr_t(1) << 21;
-
 /// True if the kernel refuses to overcommit (vm.overcommit_memory = 2): there, a heap reserve
 /// would be charged in full against the commit limit.
 bool strictOvercommit() {
@@ -39,8 +38,9 @@ void reserveHugePageHeap() {
   const size_t bytes = static_cast<size_t>(pages) * static_cast<size_t>(pageSize) / 2;
   void* block = std::malloc(bytes);
   if (!block) return;
-  const uintptr_t begin = (reinterpret_cast<uintptr_t>(block) + kHugePage - 1) & ~(kHugePage - 1);
-  const uintptr_t end = (reinterpret_cast<uintptr_t>(block) + bytes) & ~(kHugePage - 1);
+  const uintptr_t begin =
+      (reinterpret_cast<uintptr_t>(block) + kHugePageBytes - 1) & ~(kHugePageBytes - 1);
+  const uintptr_t end = (reinterpret_cast<uintptr_t>(block) + bytes) & ~(kHugePageBytes - 1);
   if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
   std::free(block);
 }

@@ -10,9 +10,10 @@
 
 namespace texgrad {
 
-/// Blocks of at least this many bytes get pages of their own, starting on a multiple of it (the
-/// transparent huge page size of x86-64 and arm64 with 4 KB base pages).
-inline constexpr std::size_t kOwnPagesMinBytes = std::size_t(1) << 21;
+/// Bytes of a transparent huge page on x86-64 and arm64 with 4 KB base pages.
+inline constexpr std::size_t kHugePageBytes = std::size_t(1) << 21;
+/// Blocks of at least this many bytes get pages of their own, starting on a multiple of it.
+inline constexpr std::size_t kOwnPagesMinBytes = kHugePageBytes;
 
 namespace detail {
 
