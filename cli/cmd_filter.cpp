@@ -42,9 +42,12 @@ void runFilter(FilterArgs args) {
   const int width = paged.image.width, height = paged.image.height;
   reportProgress(progress, "read", 1.0);
   timer.lap("read");
-  // Only a beta map (S_beta) re-assembles the stiffness; otherwise the piece integrals go.
+  // Only a beta map (S_beta) re-assembles the stiffness; otherwise the piece integrals go, and
+  // M and S are assembled only once the filter has the texture, straight into alpha M + S and
+  // the right-hand side (OperatorOptions::deferAssembly: S is never held whole).
   OperatorOptions operatorOptions;
   operatorOptions.keepPieceIntegrals = !args.betaMap.empty();
+  operatorOptions.deferAssembly = args.betaMap.empty();
   if (args.basis == "bilinear") {
     operatorOptions.basis = fem::BasisKind::Bilinear;
     operatorOptions.seamContinuityWeight = args.seamWeight;

@@ -118,6 +118,56 @@ std::vector<Eigen::VectorXf> screenedRightHandSide(const TexelOperators& ops, co
   return rhs;
 }
 
+/// What the one-shot filter solves: A = alpha M + S (+ alpha lambda C), one right-hand side per
+/// channel, and the bound on barely covered texels, which reads M.
+struct ScreenedProblem {
+  Eigen::SparseMatrix<double> system;
+  std::vector<Eigen::VectorXf> rhs;
+  BarelyCoveredNeighbours barely;
+};
+
+/// ScreenedProblem from operators handed over, without a beta map, gathered from each column of
+/// M and S while TexelOperators::screenedSystem combines them: M and S are never held beside A,
+/// nor S whole if their assembly was deferred (docs/memory.md). Per value the operations of
+/// screenedRightHandSide and barelyCoveredNeighbours, in the same order: the same bits.
+/// `barely` are the barely covered unknowns (barelyCoveredUnknowns: ascending) to bound.
+void screenColumnByColumn(std::unique_ptr<TexelOperators> operators, std::vector<int32_t> barely,
+                          const TexelValues& x0, const FilterOptions& options,
+                          const ProgressCallback& progress, ScreenedProblem& out) {
+  const int channels = x0.channels();
+  const auto unknowns = static_cast<Eigen::Index>(operators->basis().grid().unknownCount());
+  out.rhs.assign(static_cast<size_t>(channels), Eigen::VectorXf(unknowns));
+  std::vector<std::vector<int32_t>> neighbours(barely.size());
+  const ColumnVisitor visit = [&](const OperatorColumn& column) {
+    const int u = column.column;
+    for (int c = 0; c < channels; ++c) {
+      double mass = 0.0, stiffness = 0.0;
+      for (size_t k = 0; k < column.rows.size(); ++k) {
+        const auto x = static_cast<double>(x0(column.rows[k], c));
+        mass += column.mass[k] * x;
+        if (options.beta != 0.0) stiffness += column.stiffness[k] * x;
+      }
+      out.rhs[static_cast<size_t>(c)](u) =
+          options.beta == 0.0 ? static_cast<float>(options.alpha * mass)
+                              : static_cast<float>(options.alpha * mass + options.beta * stiffness);
+    }
+    const auto at = std::lower_bound(barely.begin(), barely.end(), u);
+    if (at == barely.end() || *at != u) return;
+    std::vector<int32_t>& around = neighbours[static_cast<size_t>(at - barely.begin())];
+    for (size_t k = 0; k < column.rows.size(); ++k)
+      if (column.rows[k] != u && column.mass[k] > 0.0) around.push_back(column.rows[k]);
+  };
+  Eigen::SparseMatrix<double> system =
+      TexelOperators::screenedSystem(std::move(operators), options.alpha, visit, progress);
+  out.system.swap(system);
+  out.barely.start.assign(1, 0);
+  for (const std::vector<int32_t>& around : neighbours) {
+    out.barely.neighbours.insert(out.barely.neighbours.end(), around.begin(), around.end());
+    out.barely.start.push_back(static_cast<int64_t>(out.barely.neighbours.size()));
+  }
+  out.barely.unknowns = std::move(barely);
+}
+
 /// The report of k single-channel solves run in turn, as one solve: iterations summed (the
 /// V-cycles or CG iterations, each on one channel); residuals[i] the largest relative residual
 /// ||b_c - A x_c|| / ||b_c|| over the channels after i iterations of each (a channel that
@@ -217,34 +267,55 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
   const TexelValues x0 = options.normalMap
                              ? TexelValues(domain.grid(), decoded, nullptr)
                              : TexelValues(domain.grid(), texture, levels ? &*levels : nullptr);
-  const BarelyCoveredNeighbours barely = barelyBound(domain, ops, options);
-  const Eigen::MatrixXd barelyX0 = x0.rows(barely.unknowns);
-  // The grid's maps go once nothing reads them: all but the texels' class and chart now (with a
-  // beta map once the right-hand side is formed: modulatedStiffness integrates the pieces of
-  // every cell again), those once the solver's hierarchy is built.
+  // The grid's maps go once nothing reads them: all but the texels' class and chart once the
+  // barely covered texels are found, or once A is formed if a deferred assembly or a beta map
+  // (modulatedStiffness integrates the pieces of every cell again) reads them; those once the
+  // solver's hierarchy is built.
   const bool mapped = !options.betaPerCell.empty();
-  if (mapsOwner && !mapped) mapsOwner->releaseImageMaps(TexelDomain::KeptMaps::ClassAndChart);
-  std::vector<Eigen::VectorXf> rhs = screenedRightHandSide(ops, x0, options);
-  if (mapsOwner && mapped) mapsOwner->releaseImageMaps(TexelDomain::KeptMaps::ClassAndChart);
-  // From here on only A is needed: formed in M's storage when the operators are ours, which
-  // frees S with them (`ops` is not used again).
-  Eigen::SparseMatrix<double> system =
-      owned ? TexelOperators::screenedSystem(std::move(owned), options.alpha)
-            : ops.screenedSystem(options.alpha);
+  bool mapsKept = mapsOwner != nullptr;
+  ScreenedProblem problem;
+  if (owned && !mapped) {
+    std::vector<int32_t> barelyUnknowns =
+        options.rawSolution ? std::vector<int32_t>() : barelyCoveredUnknowns(domain);
+    if (mapsKept && !owned->assemblyDeferred()) {
+      mapsOwner->releaseImageMaps(TexelDomain::KeptMaps::ClassAndChart);
+      mapsKept = false;
+    }
+    screenColumnByColumn(std::move(owned), std::move(barelyUnknowns), x0, options, progress,
+                         problem);
+  } else {
+    problem.barely = barelyBound(domain, ops, options);
+    problem.rhs = screenedRightHandSide(ops, x0, options);
+    // From here on only A is needed: formed in M's storage when the operators are ours, which
+    // frees S with them (`ops` is not used again).
+    Eigen::SparseMatrix<double> system =
+        owned ? TexelOperators::screenedSystem(std::move(owned), options.alpha)
+              : ops.screenedSystem(options.alpha);
+    problem.system.swap(system);
+  }
+  if (mapsKept) mapsOwner->releaseImageMaps(TexelDomain::KeptMaps::ClassAndChart);
+  const BarelyCoveredNeighbours& barely = problem.barely;
+  const Eigen::MatrixXd barelyX0 = x0.rows(barely.unknowns);
+  std::vector<Eigen::VectorXf>& rhs = problem.rhs;
   // Built once S is freed (the hierarchy is larger than the class and chart maps it reads, its
   // only read of the grid), then those maps go too.
   std::optional<SystemSolver> solver(std::in_place, domain.grid(), options.solver);
   if (mapsOwner) mapsOwner->releaseImageMaps();
-  solver->initAndUpdate(std::move(system), progress);
+  solver->initAndUpdate(std::move(problem.system), progress);
   FilterResult result;
-  std::vector<Eigen::MatrixXd> solved(rhs.size());
+  // Each channel's solution is kept as floats, the image's own type, until all are solved (half
+  // the bytes of doubles while the later channels solve): bounded and scattered into float
+  // pixels, the result is the same bits (the bound only clamps, and rounding is monotone).
+  std::vector<Eigen::VectorXf> solved(rhs.size());
   result.report = solveEachChannel(
       x0.channels(), progress, [&](int c, const ProgressCallback& channelProgress) {
         const auto k = static_cast<size_t>(c);
-        solved[k] = x0.channel(c).cast<double>();  // the initial guess
+        Eigen::MatrixXd channel = x0.channel(c).cast<double>();  // the initial guess
         const Eigen::MatrixXd b = rhs[k].cast<double>();
         rhs[k] = Eigen::VectorXf();
-        return solver->solve(b, solved[k], channelProgress);
+        const SolveReport report = solver->solve(b, channel, channelProgress);
+        solved[k] = channel.col(0).cast<float>();
+        return report;
       });
   result.initSeconds = solver->initSeconds();
   result.updateSeconds = solver->updateSeconds();
@@ -252,8 +323,8 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
   solver.reset();
   Eigen::MatrixXd x(domain.unknowns(), x0.channels());
   for (size_t k = 0; k < solved.size(); ++k) {
-    x.col(static_cast<Eigen::Index>(k)) = solved[k];
-    solved[k] = Eigen::MatrixXd();
+    x.col(static_cast<Eigen::Index>(k)) = solved[k].cast<double>();
+    solved[k] = Eigen::VectorXf();
   }
   boundBarelyCovered(barely, barelyX0, x);
   if (levels) {
@@ -355,7 +426,7 @@ namespace {
 FilterResult filterHandedOver(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
                               Image texture, std::optional<std::vector<uint8_t>> levels,
                               const FilterOptions& options, const ProgressCallback& progress) {
-  if (!operators || operators->mass().rows() != domain.unknowns())
+  if (!operators || &operators->basis().grid() != &domain.grid())
     throw InvalidInputError(
         "filterTexture: the operators handed over are not the domain's "
         "(TexelDomain::releaseOperators)");

@@ -59,6 +59,16 @@ void unmapOwnPages(void* block, std::size_t bytes) noexcept {
   munmap(block, mappedLength(bytes));
 }
 
+void discardWholePages(void* begin, std::size_t bytes) noexcept {
+  const auto page = static_cast<uintptr_t>(sysconf(_SC_PAGESIZE));
+  const auto first = (reinterpret_cast<uintptr_t>(begin) + page - 1) / page * page;
+  const uintptr_t end = (reinterpret_cast<uintptr_t>(begin) + bytes) / page * page;
+  // Advice the kernel always takes for private anonymous memory: the pages are freed now and
+  // come back zero-filled. Heap blocks are such memory too; glibc keeps no data inside a block
+  // in use, so a block whose pages were dropped can still be freed and reused.
+  if (end > first) madvise(reinterpret_cast<void*>(first), end - first, MADV_DONTNEED);
+}
+
 #else
 
 bool ownPagesAvailable() {
@@ -70,6 +80,8 @@ void* mapOwnPages(std::size_t) {
 }
 
 void unmapOwnPages(void*, std::size_t) noexcept {}
+
+void discardWholePages(void*, std::size_t) noexcept {}
 
 #endif
 

@@ -1,6 +1,10 @@
 // Operators assembled once (OperatorOptions::keepPieceIntegrals = false): the plain pieces are
 // clipped, integrated and assembled one window of cell-row bands at a time, so that only that
-// window's pieces are ever held (docs/memory.md, plan item 6); the same sums as assemble().
+// window's pieces are ever held (docs/memory.md, plan item 6); the same sums as assemble(). A
+// deferred assembly (OperatorOptions::deferAssembly) also holds S's values of a column only until
+// the column is complete: a visitor sees the column of M and S, which becomes alpha M + S in M's
+// values, so S is never held whole.
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
@@ -13,6 +17,7 @@
 #include <vector>
 
 #include "texel_operators_impl.h"
+#include "texgrad/core/error.h"
 
 namespace texgrad {
 namespace {
@@ -40,37 +45,49 @@ int windowStart(int k, int w) {
   return k == 0 ? 0 : k * w + 1;
 }
 
-/// The faces of each window, ascending (a face is in every window its plain pieces meet):
-/// window k holds faces[begin[k]] to faces[begin[k + 1] - 1].
-struct WindowFaces {
-  std::vector<int64_t> begin;
-  std::vector<int32_t> faces;
-};
+}  // namespace
 
-/// The windows' faces, for the bands first[f] to last[f] of each face f (none if last[f] < 0),
-/// w bands per window.
-WindowFaces windowFacesOf(std::span<const int32_t> first, std::span<const int32_t> last, int w,
-                          int windows) {
+void TexelOperators::Impl::planWindows(std::span<const int32_t> first,
+                                       std::span<const int32_t> last, int bandCount,
+                                       StreamPlan& plan) {
+  const int w = windowBands(bandCount);
+  const int windows = windowOf(bandCount - 1, w) + 1;
+  plan.windowBand.resize(static_cast<size_t>(windows) + 1);
+  for (int k = 0; k <= windows; ++k) plan.windowBand[k] = std::min(bandCount, windowStart(k, w));
   const auto faces = static_cast<int>(first.size());
   auto forEachFaceWindow = [&](const auto& use) {
     for (int f = 0; f < faces; ++f)
       if (last[f] >= 0)
         for (int k = windowOf(first[f], w); k <= windowOf(last[f], w); ++k) use(f, k);
   };
-  WindowFaces out;
-  out.begin.assign(static_cast<size_t>(windows) + 1, 0);
-  forEachFaceWindow([&](int, int k) { ++out.begin[static_cast<size_t>(k) + 1]; });
-  for (int k = 0; k < windows; ++k) out.begin[k + 1] += out.begin[k];
-  out.faces.resize(static_cast<size_t>(out.begin.back()));
-  std::vector<int64_t> cursor(out.begin.begin(), out.begin.end() - 1);
-  forEachFaceWindow([&](int f, int k) { out.faces[cursor[k]++] = f; });
+  plan.faceBegin.assign(static_cast<size_t>(windows) + 1, 0);
+  forEachFaceWindow([&](int, int k) { ++plan.faceBegin[static_cast<size_t>(k) + 1]; });
+  for (int k = 0; k < windows; ++k) plan.faceBegin[k + 1] += plan.faceBegin[k];
+  plan.faces.resize(static_cast<size_t>(plan.faceBegin.back()));
+  std::vector<int64_t> cursor(plan.faceBegin.begin(), plan.faceBegin.end() - 1);
+  forEachFaceWindow([&](int f, int k) { plan.faces[cursor[k]++] = f; });
+}
+
+TexelOperators::Impl::ColumnValues TexelOperators::Impl::columnValuesOf(
+    const SparseMatrixd& pattern, std::vector<int32_t> columns) {
+  ColumnValues out;
+  out.start.assign(columns.size() + 1, 0);
+  for (size_t i = 0; i < columns.size(); ++i)
+    out.start[i + 1] = out.start[i] + pattern.outerIndexPtr()[columns[i] + 1] -
+                       pattern.outerIndexPtr()[columns[i]];
+  out.values.assign(static_cast<size_t>(out.start.back()), 0.0);
+  out.columns = std::move(columns);
   return out;
 }
 
-}  // namespace
+double& TexelOperators::Impl::ColumnValues::at(const SparseMatrixd& pattern, int column,
+                                               int64_t p) {
+  const auto i = std::lower_bound(columns.begin(), columns.end(), column) - columns.begin();
+  return values[static_cast<size_t>(start[i] + p - pattern.outerIndexPtr()[column])];
+}
 
-void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMetric,
-                                            const ProgressCallback& progress) {
+void TexelOperators::Impl::prepareStreamed(std::vector<Eigen::Matrix2d> faceMetric,
+                                           const ProgressCallback& progress) {
   const TexelGrid& grid = basis.grid();
   bandCount = band(grid.ny - 1) + 1;
   std::vector<uint8_t> covered(grid.cellCount(), 0);
@@ -81,29 +98,105 @@ void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMet
   std::vector<uint8_t>().swap(covered);
   // The faces with seam pieces, ascending (`seam` is in face order); their pieces are clipped
   // and integrated again after the plain ones, rather than held (13 B/t at spot 4096²).
-  std::vector<int32_t> seamFaces;
+  stream = StreamPlan();
   for (const SeamPiece& sp : seam)
-    if (seamFaces.empty() || seamFaces.back() != sp.face) seamFaces.push_back(sp.face);
+    if (stream.seamFaces.empty() || stream.seamFaces.back() != sp.face)
+      stream.seamFaces.push_back(sp.face);
+  if (deferred) {
+    stream.seamColumns = seamTexels;
+    std::sort(stream.seamColumns.begin(), stream.seamColumns.end());
+    stream.seamColumns.erase(std::unique(stream.seamColumns.begin(), stream.seamColumns.end()),
+                             stream.seamColumns.end());
+  }
   releasePieces();
-  reportProgress(progress, "assemble", 0.8);
   factors = factorsOf(faceMetric, "TexelOperators");
   metric = std::move(faceMetric);
-  stiffnessValues.assign(static_cast<size_t>(mass.nonZeros()), 0.0);  // M's: zeros already
+  planWindows(bands.first, bands.last, bandCount, stream);
+}
 
-  const int w = windowBands(bandCount);
-  const int windows = windowOf(bandCount - 1, w) + 1;
-  const WindowFaces windowFaces = windowFacesOf(bands.first, bands.last, w, windows);
-  bands = FaceBands();
+void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMetric,
+                                            const ProgressCallback& progress) {
+  prepareStreamed(std::move(faceMetric), progress);
+  reportProgress(progress, "assemble", 0.8);
+  stiffnessValues.assign(static_cast<size_t>(mass.nonZeros()), 0.0);  // M's: zeros already
+  const int windows = stream.windows();
   for (int k = 0; k < windows; ++k) {
-    const auto begin = static_cast<size_t>(windowFaces.begin[k]);
-    const auto end = static_cast<size_t>(windowFaces.begin[k + 1]);
-    assembleWindow(std::span(windowFaces.faces).subspan(begin, end - begin), windowStart(k, w),
-                   std::min(bandCount, windowStart(k + 1, w)));
+    assembleWindow(k, mass.valuePtr(), stiffnessValues.data(), 0);
     reportProgress(progress, "assemble", 0.8 + 0.2 * (k + 1) / windows);
   }
-  assembleSeamFaces(seamFaces);
+  assembleSeamFaces(mass.valuePtr(), stiffnessValues.data(), nullptr);
+  stream = StreamPlan();
   finishStiffness(stiffnessValues.data());
   buildSeamContinuity();
+}
+
+void TexelOperators::Impl::assembleScreened(double alpha, const ColumnVisitor& visit,
+                                            const ProgressCallback& progress) {
+  const TexelGrid& grid = basis.grid();
+  if (grid.unknownOfTexel.empty())
+    throw InvalidInputError(
+        "screenedSystem: the grid's per-texel maps were freed (TexelDomain::releaseImageMaps) "
+        "before these operators' deferred assembly, which reads them; free them after it");
+  const int n = grid.unknownCount();
+  const int* outer = mass.outerIndexPtr();
+  const int* inner = mass.innerIndexPtr();
+  double* massValues = mass.valuePtr();
+  // Unknowns are numbered row by row: the first unknown in texel row y or above.
+  auto firstUnknownOfRow = [&](int y) {
+    const int32_t t = std::clamp(y, 0, grid.ny) * grid.nx;
+    return static_cast<int>(
+        std::lower_bound(grid.texelOfUnknown.begin(), grid.texelOfUnknown.end(), t) -
+        grid.texelOfUnknown.begin());
+  };
+  // Column u of S complete in `s`: its diagonal formed, shown with M's, then alpha M + S.
+  auto finishColumn = [&](int u, double* s) {
+    const int length = outer[u + 1] - outer[u];
+    const std::span<const int> rows(inner + outer[u], static_cast<size_t>(length));
+    double* m = massValues + outer[u];
+    detail::zeroColumnSum(rows, u, std::span(s, static_cast<size_t>(length)));
+    if (visit)
+      visit(OperatorColumn{u, rows, std::span<const double>(m, static_cast<size_t>(length)),
+                           std::span<const double>(s, static_cast<size_t>(length))});
+    for (int k = 0; k < length; ++k) m[k] = alpha * m[k] + s[k];
+  };
+  const std::vector<int32_t>& seamColumns = stream.seamColumns;
+  ColumnValues seamStiffness = columnValuesOf(mass, seamColumns);
+  // S's values of the columns [first, ...) that window k reaches, from position outer[first].
+  std::vector<double> held;
+  int first = 0;
+  const int windows = stream.windows();
+  for (int k = 0; k < windows; ++k) {
+    // After window k the cell rows below `cellEnd` are in: they reach the texel rows up to
+    // cellEnd, and the columns of the texel rows below it are complete but for seam pieces.
+    const int cellEnd = firstCellRow(stream.windowBand[k + 1]);
+    const int complete = k + 1 == windows ? n : firstUnknownOfRow(cellEnd);
+    const int reached = k + 1 == windows ? n : firstUnknownOfRow(cellEnd + 1);
+    held.resize(static_cast<size_t>(outer[reached] - outer[first]), 0.0);
+    assembleWindow(k, massValues, held.data(), outer[first]);
+    tbb::parallel_for(tbb::blocked_range<int>(first, complete, 1024),
+                      [&](const tbb::blocked_range<int>& columns) {
+                        for (int u = columns.begin(); u != columns.end(); ++u) {
+                          double* s = held.data() + (outer[u] - outer[first]);
+                          if (!std::binary_search(seamColumns.begin(), seamColumns.end(), u))
+                            finishColumn(u, s);
+                          else
+                            std::copy(s, s + (outer[u + 1] - outer[u]),
+                                      &seamStiffness.at(mass, u, outer[u]));
+                        }
+                      });
+    held.erase(held.begin(), held.begin() + (outer[complete] - outer[first]));
+    first = complete;
+    reportProgress(progress, "assemble", 0.95 * (k + 1) / windows);
+  }
+  std::vector<double>().swap(held);
+  assembleSeamFaces(massValues, nullptr, &seamStiffness);
+  tbb::parallel_for(size_t(0), seamColumns.size(), [&](size_t i) {
+    finishColumn(seamColumns[i], seamStiffness.values.data() + seamStiffness.start[i]);
+  });
+  stream = StreamPlan();
+  deferred = false;
+  buildSeamContinuity();
+  reportProgress(progress, "assemble", 1.0);
 }
 
 TexelOperators::Impl::FaceBands TexelOperators::Impl::scanFaces(std::vector<uint8_t>& covered) {
@@ -136,7 +229,12 @@ TexelOperators::Impl::FaceBands TexelOperators::Impl::scanFaces(std::vector<uint
   return bands;
 }
 
-void TexelOperators::Impl::assembleWindow(std::span<const int32_t> faces, int lo, int hi) {
+void TexelOperators::Impl::assembleWindow(int k, double* massOut, double* stiffnessOut,
+                                          int64_t stiffnessFirst) {
+  const auto begin = static_cast<size_t>(stream.faceBegin[k]);
+  const auto end = static_cast<size_t>(stream.faceBegin[k + 1]);
+  const std::span<const int32_t> faces = std::span(stream.faces).subspan(begin, end - begin);
+  const int lo = stream.windowBand[k], hi = stream.windowBand[k + 1];
   const int grain = options.facesPerTask;
   const auto count = static_cast<int>(faces.size());
   std::vector<Chunk> chunks(static_cast<size_t>((count + grain - 1) / grain));
@@ -152,10 +250,12 @@ void TexelOperators::Impl::assembleWindow(std::span<const int32_t> faces, int lo
   const PlainPieces pieces = bucketByBand(chunks, lo, hi);
   report.plainFullPieces += static_cast<int>(pieces.full.size());
   report.plainPartialPieces += static_cast<int>(pieces.partial.size());
-  assembleBands(pieces, factors, nullptr, mass.valuePtr(), stiffnessValues.data());
+  assembleBands(pieces, factors, nullptr, massOut, stiffnessOut, stiffnessFirst);
 }
 
-void TexelOperators::Impl::assembleSeamFaces(const std::vector<int32_t>& seamFaces) {
+void TexelOperators::Impl::assembleSeamFaces(double* massOut, double* stiffnessOut,
+                                             ColumnValues* stiffnessColumns) {
+  const std::vector<int32_t>& seamFaces = stream.seamFaces;
   // Chunks of faces integrated in parallel and added in chunk order (the order of `seam`), a few
   // chunks in flight, as sumOverSurface does.
   const int grain = options.facesPerTask;
@@ -180,7 +280,7 @@ void TexelOperators::Impl::assembleSeamFaces(const std::vector<int32_t>& seamFac
   const auto addInOrder =
       tbb::make_filter<Chunk, void>(tbb::filter_mode::serial_in_order, [&](const Chunk& chunk) {
         assembleSeams(chunk.seam, chunk.texels.data(), chunk.values.data(), factors, nullptr,
-                      mass.valuePtr(), stiffnessValues.data());
+                      massOut, stiffnessOut, stiffnessColumns);
       });
   tbb::parallel_pipeline(static_cast<size_t>(2 * tbb::this_task_arena::max_concurrency()),
                          chunkIndices & integrateChunk & addInOrder);

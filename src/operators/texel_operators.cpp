@@ -62,6 +62,10 @@ void OperatorOptions::validate() const {
   if (facesPerTask < 1) throw InvalidInputError("OperatorOptions.facesPerTask must be >= 1");
   if (!(seamContinuityWeight >= 0.0) || !std::isfinite(seamContinuityWeight))
     throw InvalidInputError("OperatorOptions.seamContinuityWeight must be finite and >= 0");
+  if (deferAssembly && keepPieceIntegrals)
+    throw InvalidInputError(
+        "OperatorOptions.deferAssembly needs keepPieceIntegrals = false (a deferred assembly "
+        "never holds the piece integrals)");
   if (seamContinuityWeight != 0.0 && basis != fem::BasisKind::Bilinear)
     throw InvalidInputError(
         "OperatorOptions.seamContinuityWeight applies to the Bilinear basis only (the "
@@ -91,6 +95,16 @@ OperatorOptions OperatorOptions::assembledOnce() {
 }
 
 int TexelOperators::Impl::band(int cellY) const { return (cellY + 1) / kBandRows; }
+
+int TexelOperators::Impl::firstCellRow(int b) { return b * kBandRows - 1; }
+
+void TexelOperators::Impl::requireAssembled(const char* caller) const {
+  if (deferred)
+    throw InvalidInputError(std::string(caller) +
+                            ": these operators were built with OperatorOptions::deferAssembly "
+                            "and not assembled yet; assemble them with the visiting "
+                            "TexelOperators::screenedSystem, or build them without deferAssembly");
+}
 
 void TexelOperators::Impl::addPlainPiece(int face, const FacePiece& piece,
                                          std::span<const PieceVertex> poly, Chunk& chunk) {
@@ -291,11 +305,11 @@ void TexelOperators::Impl::buildPattern(const std::vector<uint8_t>& cellCovered)
 
 namespace {
 
-/// Adds local (k x k) values into the values of a matrix with the pattern of `m` (column-major
-/// CSC) at (row texels[j], column texels[i]).
-template <typename Local>
-void scatter(const SparseMatrixd& m, double* values, const int32_t* texels, int k,
-             const Local& local, double scale) {
+/// Adds local (k x k) values into the entries (row texels[j], column texels[i]) of a matrix with
+/// the pattern of `m` (column-major CSC): entry(column, position) is where each value goes.
+template <typename Local, typename Entry>
+void scatter(const SparseMatrixd& m, const int32_t* texels, int k, const Local& local, double scale,
+             const Entry& entry) {
   const int* outer = m.outerIndexPtr();
   const int* inner = m.innerIndexPtr();
   for (int i = 0; i < k; ++i) {
@@ -305,7 +319,7 @@ void scatter(const SparseMatrixd& m, double* values, const int32_t* texels, int 
     for (int j = 0; j < k; ++j) {
       if (texels[j] < 0) continue;
       const int* pos = std::lower_bound(begin, end, texels[j]);
-      values[pos - inner] += scale * local(j, i);
+      entry(texels[i], pos - inner) += scale * local(j, i);
     }
   }
 }
@@ -331,12 +345,13 @@ std::array<int, 16> cellEntries(const SparseMatrixd& m, const std::array<int32_t
   return at;
 }
 
-/// values[at[4 i + j]] += scale * local(j, i) at the entries cellEntries found (as scatter adds).
+/// values[at[4 i + j] - first] += scale * local(j, i) at the entries cellEntries found (as
+/// scatter adds), for values that start at position `first` of the pattern.
 void addCell(const std::array<int, 16>& at, const Eigen::Matrix4d& local, double scale,
-             double* values) {
+             double* values, int64_t first = 0) {
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j)
-      if (at[4 * i + j] >= 0) values[at[4 * i + j]] += scale * local(j, i);
+      if (at[4 * i + j] >= 0) values[at[4 * i + j] - first] += scale * local(j, i);
 }
 
 /// Neumaier's compensated sum of values[begin, end) without values[skip]: within an ulp of the
@@ -354,8 +369,22 @@ double sumExcept(const double* values, int begin, int end, int skip) {
 }
 
 /// Sets every diagonal entry of a symmetric matrix with the pattern of `m` to minus the sum of
-/// the other entries of its column, so that the matrix maps constants to zero by construction.
-///
+/// the other entries of its column (detail::zeroColumnSum).
+void zeroColumnSums(const SparseMatrixd& m, double* values) {
+  const int* outer = m.outerIndexPtr();
+  const int* inner = m.innerIndexPtr();
+  tbb::parallel_for(tbb::blocked_range<int>(0, static_cast<int>(m.outerSize()), 1 << 12),
+                    [&](const tbb::blocked_range<int>& columns) {
+                      for (int t = columns.begin(); t != columns.end(); ++t) {
+                        const auto length = static_cast<size_t>(outer[t + 1] - outer[t]);
+                        detail::zeroColumnSum(std::span(inner + outer[t], length), t,
+                                              std::span(values + outer[t], length));
+                      }
+                    });
+}
+
+}  // namespace
+
 /// The stiffness is S_h = d^T *1 d (paper Sec. 5.3) with d 1 = 0 because the texel functions are
 /// a partition of unity (Claim 3): S_tt = -sum_{s != t} S_st holds exactly. Summed piece by piece
 /// as integrated, S 1 is off by the rounding of the parts: on a seam piece of a UV sliver with a
@@ -363,22 +392,13 @@ double sumExcept(const double* values, int begin, int end, int skip) {
 /// metric factors combine stiffness parts of up to 1e4 into entries of about 1, whose rows vanish
 /// only to 5e-12. Formed here, a row's sum is zero up to one rounding of its diagonal. Every
 /// column with an entry holds its diagonal: a piece adds (t, t) with every (s, t).
-void zeroColumnSums(const SparseMatrixd& m, double* values) {
-  const int* outer = m.outerIndexPtr();
-  const int* inner = m.innerIndexPtr();
-  tbb::parallel_for(tbb::blocked_range<int>(0, static_cast<int>(m.outerSize()), 1 << 12),
-                    [&](const tbb::blocked_range<int>& columns) {
-                      for (int t = columns.begin(); t != columns.end(); ++t) {
-                        const int* diagonal =
-                            std::lower_bound(inner + outer[t], inner + outer[t + 1], t);
-                        if (diagonal == inner + outer[t + 1] || *diagonal != t) continue;
-                        const auto at = static_cast<int>(diagonal - inner);
-                        values[at] = -sumExcept(values, outer[t], outer[t + 1], at);
-                      }
-                    });
+void detail::zeroColumnSum(std::span<const int> rows, int column, std::span<double> values) {
+  const auto diagonal = std::lower_bound(rows.begin(), rows.end(), column);
+  if (diagonal == rows.end() || *diagonal != column) return;
+  const auto at = static_cast<int>(diagonal - rows.begin());
+  values[static_cast<size_t>(at)] =
+      -sumExcept(values.data(), 0, static_cast<int>(values.size()), at);
 }
-
-}  // namespace
 
 void TexelOperators::Impl::assemble(const std::vector<FaceFactors>& faceFactors, const double* beta,
                                     double* massOut, double* stiffnessOut) const {
@@ -397,7 +417,7 @@ void TexelOperators::Impl::finishStiffness(double* stiffnessOut) const {
 void TexelOperators::Impl::assembleBands(const PlainPieces& pieces,
                                          const std::vector<FaceFactors>& faceFactors,
                                          const double* beta, double* massOut,
-                                         double* stiffnessOut) const {
+                                         double* stiffnessOut, int64_t stiffnessFirst) const {
   const TexelGrid& grid = basis.grid();
   static const detail::BilinearIntegrals unit = detail::bilinearIntegrals(detail::unitCellMoments());
   auto cellBeta = [&](int a, int b) { return beta ? beta[grid.cellIndex(a, b)] : 1.0; };
@@ -407,7 +427,7 @@ void TexelOperators::Impl::assembleBands(const PlainPieces& pieces,
     if (massOut) addCell(at, in.mass, f.mass, massOut);
     if (stiffnessOut) {
       const Eigen::Matrix4d s = f.xx * in.kxx + f.xy * in.kxy + f.yy * in.kyy;
-      addCell(at, s, cellBeta(a, b), stiffnessOut);
+      addCell(at, s, cellBeta(a, b), stiffnessOut, stiffnessFirst);
     }
   };
   const int first = pieces.firstBand;
@@ -431,22 +451,26 @@ void TexelOperators::Impl::assembleBands(const PlainPieces& pieces,
 void TexelOperators::Impl::assembleSeams(std::span<const SeamPiece> pieces, const int32_t* texels,
                                          const double* values,
                                          const std::vector<FaceFactors>& faceFactors,
-                                         const double* beta, double* massOut,
-                                         double* stiffnessOut) const {
+                                         const double* beta, double* massOut, double* stiffnessOut,
+                                         ColumnValues* stiffnessColumns) const {
   const TexelGrid& grid = basis.grid();
+  auto massEntry = [massOut](int, std::ptrdiff_t p) -> double& { return massOut[p]; };
+  auto stiffnessEntry = [&](int column, std::ptrdiff_t p) -> double& {
+    return stiffnessColumns ? stiffnessColumns->at(mass, column, p) : stiffnessOut[p];
+  };
   std::vector<double> combined;
   for (const SeamPiece& sp : pieces) {
     const int k = sp.texelEnd - sp.texelBegin;
     const FaceFactors& f = faceFactors[sp.face];
     const double* v = values + sp.valueBegin;
     const int packed = k * (k + 1) / 2;
-    if (massOut) scatter(mass, massOut, texels + sp.texelBegin, k, PackedSymmetric{v}, f.mass);
-    if (stiffnessOut) {
+    if (massOut) scatter(mass, texels + sp.texelBegin, k, PackedSymmetric{v}, f.mass, massEntry);
+    if (stiffnessOut || stiffnessColumns) {
       combined.resize(static_cast<size_t>(packed));
       for (int i = 0; i < packed; ++i)
         combined[i] = f.xx * v[packed + i] + f.xy * v[2 * packed + i] + f.yy * v[3 * packed + i];
-      scatter(mass, stiffnessOut, texels + sp.texelBegin, k, PackedSymmetric{combined.data()},
-              beta ? beta[grid.cellIndex(sp.cellX, sp.cellY)] : 1.0);
+      scatter(mass, texels + sp.texelBegin, k, PackedSymmetric{combined.data()},
+              beta ? beta[grid.cellIndex(sp.cellX, sp.cellY)] : 1.0, stiffnessEntry);
     }
   }
 }
@@ -463,6 +487,11 @@ TexelOperators::TexelOperators(const TexturedMesh& mesh, const Atlas& atlas,
     impl_->buildPattern(impl_->coveredCells());
     reportProgress(progress, "assemble", 0.8);
     setMetric(std::move(metric));
+  } else if (options.deferAssembly) {
+    impl_->deferred = true;
+    impl_->prepareStreamed(std::move(metric), progress);
+    reportProgress(progress, "integrate pieces", 1.0);
+    return;
   } else {
     impl_->assembleStreamed(std::move(metric), progress);
   }
@@ -529,15 +558,21 @@ MassStiffness TexelOperators::assembledFor(const std::vector<Eigen::Matrix2d>& m
 }
 
 const std::vector<Eigen::Matrix2d>& TexelOperators::metric() const { return impl_->metric; }
-const SparseMatrixd& TexelOperators::mass() const { return impl_->mass; }
+const SparseMatrixd& TexelOperators::mass() const {
+  impl_->requireAssembled("mass");
+  return impl_->mass;
+}
 SparseViewd TexelOperators::stiffness() const {
+  impl_->requireAssembled("stiffness");
   const SparseMatrixd& m = impl_->mass;
   return SparseViewd(m.rows(), m.cols(), m.nonZeros(), m.outerIndexPtr(), m.innerIndexPtr(),
                      impl_->stiffnessValues.data());
 }
 const SparseMatrixd& TexelOperators::seamContinuity() const {
+  impl_->requireAssembled("seamContinuity");
   return impl_->continuityMatrix();
 }
+bool TexelOperators::assemblyDeferred() const { return impl_->deferred; }
 const OperatorOptions& TexelOperators::options() const { return impl_->options; }
 const fem::TexelBasis& TexelOperators::basis() const { return impl_->basis; }
 const OperatorReport& TexelOperators::report() const { return impl_->report; }
@@ -548,7 +583,9 @@ int64_t TexelOperators::storageBytes() const {
          sparseStorageBytes(m.zeroContinuity) +
          capacityBytes(m.stiffnessValues, m.seamValues, m.plain.fullBandBegin,
                        m.plain.partialBandBegin, m.seamTexels, m.metric, m.factors, m.plain.full,
-                       m.plain.partial, m.seam);
+                       m.plain.partial, m.seam) +
+         capacityBytes(m.stream.windowBand, m.stream.faces, m.stream.seamFaces,
+                       m.stream.seamColumns, m.stream.faceBegin);
 }
 
 namespace {
@@ -579,6 +616,7 @@ void combineValues(const SparseMatrixd& pattern, const double* stiffness,
 }  // namespace
 
 SparseMatrixd TexelOperators::combined(const EntryCombination& combine) const {
+  impl_->requireAssembled("combined");
   SparseMatrixd out = impl_->mass;
   combineValues(out, impl_->stiffnessValues.data(), combine, out.valuePtr());
   return out;
@@ -587,6 +625,7 @@ SparseMatrixd TexelOperators::combined(const EntryCombination& combine) const {
 SparseMatrixd TexelOperators::combined(std::unique_ptr<TexelOperators> operators,
                                        const EntryCombination& combine) {
   if (!operators) throw InvalidInputError("combined: no operators were handed over");
+  operators->impl_->requireAssembled("combined");
   SparseMatrixd out;
   out.swap(operators->impl_->mass);  // as in screenedSystem: M's arrays become the result's
   combineValues(out, operators->impl_->stiffnessValues.data(), combine, out.valuePtr());
@@ -599,6 +638,7 @@ void TexelOperators::addSeamScreening(double alpha, SparseMatrixd& system) const
 }
 
 SparseMatrixd TexelOperators::screenedSystem(double alpha) const {
+  impl_->requireAssembled("screenedSystem");
   // M and S share one pattern: copy M's and combine the values (no sparse merge).
   SparseMatrixd system = impl_->mass;
   screenValues(alpha, impl_->stiffnessValues.data(), system.valuePtr(), system.nonZeros());
@@ -609,11 +649,43 @@ SparseMatrixd TexelOperators::screenedSystem(double alpha) const {
 SparseMatrixd TexelOperators::screenedSystem(std::unique_ptr<TexelOperators> operators,
                                              double alpha) {
   if (!operators) throw InvalidInputError("screenedSystem: no operators were handed over");
+  operators->impl_->requireAssembled("screenedSystem");
   // M's own arrays become A's (a swap: Eigen 3.4's move assignment of a SparseMatrix copies).
   SparseMatrixd system;
   system.swap(operators->impl_->mass);
   screenValues(alpha, operators->impl_->stiffnessValues.data(), system.valuePtr(),
                system.nonZeros());
+  operators->addSeamScreening(alpha, system);
+  return system;
+}
+
+SparseMatrixd TexelOperators::screenedSystem(std::unique_ptr<TexelOperators> operators,
+                                             double alpha, const ColumnVisitor& visit,
+                                             const ProgressCallback& progress) {
+  if (!operators) throw InvalidInputError("screenedSystem: no operators were handed over");
+  Impl& impl = *operators->impl_;
+  if (impl.deferred) {
+    impl.assembleScreened(alpha, visit, progress);  // M's values become alpha M + S there
+  } else {
+    // Assembled already: each column shown as it is, then combined as screenedSystem does.
+    const SparseMatrixd& m = impl.mass;
+    const int* outer = m.outerIndexPtr();
+    if (visit)
+      tbb::parallel_for(tbb::blocked_range<int>(0, static_cast<int>(m.outerSize()), 1024),
+                        [&](const tbb::blocked_range<int>& columns) {
+                          for (int u = columns.begin(); u != columns.end(); ++u) {
+                            const auto length = static_cast<size_t>(outer[u + 1] - outer[u]);
+                            visit(OperatorColumn{
+                                u, std::span<const int>(m.innerIndexPtr() + outer[u], length),
+                                std::span<const double>(m.valuePtr() + outer[u], length),
+                                std::span<const double>(impl.stiffnessValues.data() + outer[u],
+                                                        length)});
+                          }
+                        });
+    screenValues(alpha, impl.stiffnessValues.data(), impl.mass.valuePtr(), m.nonZeros());
+  }
+  SparseMatrixd system;
+  system.swap(impl.mass);  // M's arrays, now alpha M + S, become A's
   operators->addSeamScreening(alpha, system);
   return system;
 }

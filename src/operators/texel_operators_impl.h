@@ -13,6 +13,14 @@
 #include "texgrad/operators/texel_operators.h"
 
 namespace texgrad {
+namespace detail {
+
+/// Sets a symmetric matrix's diagonal entry in column `column` (rows `rows`, ascending, values
+/// `values`) to minus the sum of the column's other entries, so the matrix maps constants to
+/// zero by construction (S 1 = 0; texel_operators.cpp says why). No diagonal entry: no change.
+void zeroColumnSum(std::span<const int> rows, int column, std::span<double> values);
+
+}  // namespace detail
 
 struct TexelOperators::Impl {
   /// Piece that is a whole cell with bilinear basis.
@@ -98,10 +106,17 @@ struct TexelOperators::Impl {
   /// pairs (from `seam`).
   void buildPattern(const std::vector<uint8_t>& cellCovered);
   /// Builds the pattern and assembles M and S for `metric` band by band without keeping the
-  /// plain pieces: a first pass over the faces finds the covered cells, the seam pieces and each
-  /// face's bands, then windows of bands are clipped, integrated and assembled in turn
-  /// (band_streaming.cpp). The same sums in the same order as assemble(): bit-identical.
+  /// plain pieces (prepareStreamed, then every window and the seam faces into M and S whole;
+  /// band_streaming.cpp). The same sums in the same order as assemble(): bit-identical.
   void assembleStreamed(std::vector<Eigen::Matrix2d> metric, const ProgressCallback& progress);
+  /// assembleStreamed's first part, all a deferred assembly does in the constructor: a first
+  /// pass over the faces finds the covered cells, the seam pieces and each face's bands; then
+  /// the pattern, the faces of every window of bands (`stream`) and the metric factors.
+  void prepareStreamed(std::vector<Eigen::Matrix2d> metric, const ProgressCallback& progress);
+  /// The deferred assembly (OperatorOptions::deferAssembly): windows in turn, each column of S
+  /// held only until complete; `visit` sees every column of M and S, which then becomes
+  /// alpha M + S in M's values (band_streaming.cpp).
+  void assembleScreened(double alpha, const ColumnVisitor& visit, const ProgressCallback& progress);
   /// Bands each face's plain pieces meet, first[f] to last[f] (none if last[f] < 0).
   struct FaceBands {
     std::vector<int32_t> first, last;
@@ -109,11 +124,41 @@ struct TexelOperators::Impl {
   /// assembleStreamed's first pass: clips every face, marks the covered cells in `covered`,
   /// gathers the seam pieces (with their texels, not their integrals) and returns the bands.
   FaceBands scanFaces(std::vector<uint8_t>& covered);
-  /// Clips `faces` again and adds their plain pieces in bands [lo, hi) into M and S.
-  void assembleWindow(std::span<const int32_t> faces, int lo, int hi);
-  /// Clips the given faces (ascending) again, integrates their seam pieces and adds them into
-  /// M and S in face order, a few chunks of faces in flight (band_streaming.cpp).
-  void assembleSeamFaces(const std::vector<int32_t>& seamFaces);
+  /// What prepareStreamed leaves for the windows: window k holds bands [windowBand[k],
+  /// windowBand[k + 1]) and faces[faceBegin[k]] to faces[faceBegin[k + 1] - 1]; the faces with
+  /// seam pieces (ascending), clipped again after the windows; and, for a deferred assembly, the
+  /// columns those seam pieces add to (ascending).
+  struct StreamPlan {
+    std::vector<int32_t> windowBand;
+    std::vector<int64_t> faceBegin;
+    std::vector<int32_t> faces;
+    std::vector<int32_t> seamFaces;
+    std::vector<int32_t> seamColumns;
+    int windows() const { return static_cast<int>(faceBegin.size()) - 1; }
+  };
+  /// S's values of some columns of the pattern (those of StreamPlan::seamColumns), in column
+  /// order, while a deferred assembly completes them.
+  struct ColumnValues {
+    std::vector<int32_t> columns;  ///< ascending
+    std::vector<int64_t> start;    ///< offset of each column's values, and the total
+    std::vector<double> values;
+    /// The value at position p of M's pattern (p in column `column`, one of `columns`).
+    double& at(const SparseMatrixd& pattern, int column, int64_t p);
+  };
+  /// Fills the plan's windows of bands for the bands first[f] to last[f] of each face f (none
+  /// if last[f] < 0): their bands, and their faces, ascending (a face is in every window its
+  /// plain pieces meet).
+  static void planWindows(std::span<const int32_t> first, std::span<const int32_t> last,
+                          int bandCount, StreamPlan& plan);
+  /// Room for S's values of `columns` (ascending) on `pattern`, all zero.
+  static ColumnValues columnValuesOf(const SparseMatrixd& pattern, std::vector<int32_t> columns);
+  /// Clips window k's faces again and adds their plain pieces into M's values (`massOut`, at
+  /// the pattern's positions) and S's (`stiffnessOut`, positions from `stiffnessFirst` on).
+  void assembleWindow(int k, double* massOut, double* stiffnessOut, int64_t stiffnessFirst);
+  /// Clips the plan's seam faces again, integrates their seam pieces and adds them into M and S
+  /// (S into `stiffnessColumns` instead, if given) in face order, a few chunks of faces in
+  /// flight (band_streaming.cpp).
+  void assembleSeamFaces(double* massOut, double* stiffnessOut, ColumnValues* stiffnessColumns);
   /// C of the soft seam-continuity energy for the bilinear basis (none for the seam-continuous
   /// basis).
   void buildSeamContinuity();
@@ -131,13 +176,17 @@ struct TexelOperators::Impl {
                 double* stiffnessValues) const;
   /// Adds the plain pieces into M's and S_beta's values: bands of one colour (parity) at a time,
   /// even first, in parallel (two bands of a colour share no column).
+  /// S's values start at position `stiffnessFirst` of the pattern (0: all of them).
   void assembleBands(const PlainPieces& pieces, const std::vector<FaceFactors>& faceFactors,
-                     const double* beta, double* massValues, double* stiffnessValues) const;
+                     const double* beta, double* massValues, double* stiffnessValues,
+                     int64_t stiffnessFirst = 0) const;
   /// Adds seam pieces (in order; their texels and integrals at texelBegin and valueBegin of
-  /// `texels` and `values`) into M's and S_beta's values.
+  /// `texels` and `values`) into M's and S_beta's values (S's into `stiffnessColumns` instead,
+  /// if given).
   void assembleSeams(std::span<const SeamPiece> pieces, const int32_t* texels, const double* values,
                      const std::vector<FaceFactors>& faceFactors, const double* beta,
-                     double* massValues, double* stiffnessValues) const;
+                     double* massValues, double* stiffnessValues,
+                     ColumnValues* stiffnessColumns = nullptr) const;
   /// Sets S's diagonal to minus the sum of the rest of its column (S 1 = 0; zeroColumnSums).
   void finishStiffness(double* stiffnessValues) const;
   /// Frees the piece integrals (OperatorOptions::keepPieceIntegrals = false).
@@ -145,6 +194,10 @@ struct TexelOperators::Impl {
   /// Throws InvalidInputError naming `caller` if the piece integrals were freed.
   void requirePieces(const char* caller) const;
   int band(int cellY) const;
+  /// First cell row of band b (cell rows start at -1).
+  static int firstCellRow(int b);
+  /// Throws InvalidInputError naming `caller` while a deferred assembly has not run.
+  void requireAssembled(const char* caller) const;
 
   OperatorOptions options;
   fem::TexelBasis basis;
@@ -157,6 +210,8 @@ struct TexelOperators::Impl {
   std::vector<double> seamValues;
   int bandCount = 0;
   bool piecesReleased = false;       ///< releasePieces() ran: no re-assembly possible
+  bool deferred = false;             ///< a deferred assembly has not run yet
+  StreamPlan stream;                 ///< kept from prepareStreamed to the windows' assembly
   SparseMatrixd mass;  ///< M; its index arrays are the pattern of every assembled matrix
   std::vector<double> stiffnessValues;  ///< S on mass's pattern (TexelOperators::stiffness())
   SparseMatrixd seamContinuity;         ///< E_C(x) = x^T C x (paper Sec. 4.2); bilinear basis only

@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -206,7 +207,7 @@ namespace detail {
 // diagonal entry already gives (J, K). The extra entries carry zeros, which add nothing.
 template <typename T>
 Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
-                         const std::vector<T>& stencils, const std::vector<T>& rowSums,
+                         std::span<const T> stencils, const std::vector<T>& rowSums,
                          const GridLevel& coarse) {
   if (stencils.size() != static_cast<size_t>(system.stencilSize) ||
       rowSums.size() != static_cast<size_t>(fine.slotCount) ||
@@ -270,10 +271,10 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
 }
 
 template Sparse galerkinFromLevel<float>(const GridLevel&, const LevelSystem&,
-                                         const std::vector<float>&, const std::vector<float>&,
+                                         std::span<const float>, const std::vector<float>&,
                                          const GridLevel&);
 template Sparse galerkinFromLevel<double>(const GridLevel&, const LevelSystem&,
-                                          const std::vector<double>&, const std::vector<double>&,
+                                          std::span<const double>, const std::vector<double>&,
                                           const GridLevel&);
 
 }  // namespace detail

@@ -323,13 +323,39 @@ void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& sys
   if (nb > 0) system.boundarySolver.factorize(boundaryBlock(level, a, system));
 }
 
+namespace {
+
+/// Lattice rows per band of assignStencils: 1/64 of spot's at 4096².
+constexpr int kStencilBandRows = 64;
+
+/// The first unknown of `level` on lattice row y or above, for a level whose unknowns are
+/// numbered row by row (level 0).
+int firstUnknownFrom(const GridLevel& level, int y) {
+  int lo = 0, hi = level.unknownCount();
+  while (lo < hi) {
+    const int mid = lo + (hi - lo) / 2;
+    if (level.point(mid).y < y)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo;
+}
+
+}  // namespace
+
 template <typename T>
 void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSystem& system,
-                    std::vector<T>& stencils) {
-  stencils.assign(static_cast<size_t>(system.stencilSize), T(0));
+                    PageArray<T>& stencils, const std::function<void(int)>& consumed) {
+  // A new array fills page by page on pages of its own while `a` is released (consumed), else it
+  // comes from the heap (where it may take a freed block's place); an update of the same size
+  // refills the one it has.
+  if (stencils.size() != static_cast<size_t>(system.stencilSize))
+    stencils = PageArray<T>(static_cast<size_t>(system.stencilSize), static_cast<bool>(consumed));
   auto fillRun = [&](const SlotRow& row, int q) {
     const int64_t n = row.runLength(q);
     T* w = stencils.data() + row.coeffsOf(q);
+    std::fill_n(w, kStencilPlanes * n, T(0));
     for (int64_t i = 0; i < n; ++i) {
       const int64_t s = row.begin + q + 2 * i;
       if (system.kind[static_cast<size_t>(s)] != SlotKind::Interior) continue;
@@ -344,16 +370,30 @@ void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSyste
       w[kInverseDiagonal * n + i] = T(1) / centre;
     }
   };
+  // Every run with its lattice row, upward (the order of the runs of one row does not matter:
+  // each writes its own coefficients).
+  std::vector<std::pair<int, const SlotRow*>> runs;
   for (const std::vector<SlotRow>& rows : system.rows)
-    tbb::parallel_for(size_t(0), rows.size(), [&](size_t r) {
-      for (int q = 0; q < 2; ++q) fillRun(rows[r], q);
+    for (const SlotRow& row : rows) runs.emplace_back(level.pointOfSlot(row.begin).y, &row);
+  std::sort(runs.begin(), runs.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (size_t first = 0; first < runs.size();) {
+    const int end = runs[first].first + kStencilBandRows;
+    size_t last = first;
+    while (last < runs.size() && runs[last].first < end) ++last;
+    tbb::parallel_for(first, last, [&](size_t r) {
+      for (int q = 0; q < 2; ++q) fillRun(*runs[r].second, q);
     });
+    if (consumed)
+      consumed(last == runs.size() ? level.unknownCount() : firstUnknownFrom(level, end));
+    first = last;
+  }
 }
 
 template void assignStencils<float>(const GridLevel&, const SparseSum&, const LevelSystem&,
-                                    std::vector<float>&);
+                                    PageArray<float>&, const std::function<void(int)>&);
 template void assignStencils<double>(const GridLevel&, const SparseSum&, const LevelSystem&,
-                                     std::vector<double>&);
+                                     PageArray<double>&, const std::function<void(int)>&);
 
 int64_t LevelSystem::storageBytes() const {
   return capacityBytes(kind, rows[0], rows[1], boxRows, bands, boundarySlots, boundaryOfUnknown,

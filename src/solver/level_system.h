@@ -5,8 +5,11 @@
 #include <Eigen/SparseCore>
 #include <array>
 #include <cstdint>
+#include <functional>
+#include <span>
 #include <vector>
 
+#include "texgrad/core/page_allocator.h"
 #include "texgrad/solver/cholmod_solver.h"
 #include "texgrad/solver/grid_hierarchy.h"
 #include "texgrad/solver/sparse_sum.h"
@@ -114,10 +117,15 @@ void releaseUnknownIndex(LevelSystem& system);
 void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system);
 
 /// Numeric phase for the interior: the stencil planes of every run (see SlotRow) from the rows of
-/// `a` at interior unknowns; the other slots of a run get zero coefficients and mask 0.
+/// `a` at interior unknowns; the other slots of a run get zero coefficients and mask 0. The runs
+/// are filled a band of lattice rows at a time, upward; a new PageArray (unless `stencils` has
+/// the size already) is on pages of its own if `consumed` is given, so that it becomes resident
+/// as it is filled, else from the heap. After each band, `consumed(u)`, if given, learns that no
+/// column of `a` before unknown u is read again (level 0 numbers its unknowns row by row), so
+/// that a caller owning `a` can release it meanwhile.
 template <typename T>
 void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSystem& system,
-                    std::vector<T>& stencils);
+                    PageArray<T>& stencils, const std::function<void(int)>& consumed = {});
 
 /// Pᵀ Ã P for the bilinear prolongation P from `fine` to `coarse`, where Ã is A^l as the fine
 /// level's assigned data hold it, read without a matrix: an interior row is its stencil at all 9
@@ -132,7 +140,7 @@ void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSyste
 /// kernel.
 template <typename T>
 Eigen::SparseMatrix<double> galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
-                                              const std::vector<T>& stencils,
+                                              std::span<const T> stencils,
                                               const std::vector<T>& rowSums,
                                               const GridLevel& coarse);
 

@@ -166,7 +166,8 @@ struct MultigridSolver<Scalar>::Impl {
   using T = Scalar;
   struct Level {
     detail::LevelSystem sys;
-    std::vector<T> stencil, x, b, r;
+    PageArray<T> stencil;  ///< interior stencils (assignStencils)
+    std::vector<T> x, b, r;
     detail::LineSet lines;       ///< anisotropic interior slots relaxed by lines
     std::vector<T> lineCoeffs;   ///< their coefficients (detail::kLinePlanes per slot)
     std::vector<detail::BoxRow> boxRows;
@@ -260,7 +261,10 @@ struct MultigridSolver<Scalar>::Impl {
         // The cycles never read the unknown index, nor does assignStencils: it goes before the
         // stencils, the level's largest array, are allocated (lower peak memory).
         detail::releaseUnknownIndex(lv.sys);
-        if (numericPhase) detail::assignStencils<T>(grid, a, lv.sys, lv.stencil);
+        if (numericPhase)
+          detail::assignStencils<T>(grid, a, lv.sys, lv.stencil,
+                                    fromLevelData && handedOver ? releaser(*handedOver)
+                                                                : std::function<void(int)>());
       }
       if (l == coarsest()) {
         // A one-level hierarchy is solved directly: only then is A^0 formed (unless handed over).
@@ -278,7 +282,9 @@ struct MultigridSolver<Scalar>::Impl {
       if (l == 0 && handedOver) Eigen::SparseMatrix<double>().swap(*handedOver);  // A^0
       if (fromLevelData) {
         Eigen::SparseMatrix<double> formed =
-            detail::galerkinFromLevel(grid, lv.sys, lv.stencil, rowSums, hierarchy.level(l + 1));
+            detail::galerkinFromLevel(grid, lv.sys, std::span<const T>(lv.stencil.data(),
+                                                                      lv.stencil.size()),
+                                      rowSums, hierarchy.level(l + 1));
         next.swap(formed);
       }
       heldMatrixBytes[sl] +=
@@ -289,6 +295,20 @@ struct MultigridSolver<Scalar>::Impl {
         a = SparseSum(coarse);
       }
     }
+  }
+
+  /// For assignStencils at level 0: releases the pages of a handed-over A^0's entries in the
+  /// columns the stencils have read (its last reader), so that A^0 shrinks as level 0's
+  /// stencils grow instead of both being whole at once (docs/memory.md). The matrix is freed
+  /// after, never read again: released pages only stop being resident.
+  static std::function<void(int)> releaser(Eigen::SparseMatrix<double>& a) {
+    // Each time from the arrays' start: a page across the previous end goes too (pages that
+    // are gone already cost the kernel nothing).
+    return [&a](int u) {
+      const auto end = static_cast<size_t>(a.outerIndexPtr()[u]);
+      detail::discardWholePages(a.valuePtr(), end * sizeof(double));
+      detail::discardWholePages(a.innerIndexPtr(), end * sizeof(int));
+    };
   }
 
   /// rowSums from the level-0 operator (columns of the symmetric A: its rows).
@@ -796,7 +816,8 @@ int64_t MultigridSolver<Scalar>::storageBytes() const {
                   capacityBytes(m.rowSums) +
                   static_cast<int64_t>(m.coarseWork.size()) * int64_t(sizeof(double));
   for (const auto& lv : m.levels) {
-    bytes += lv.sys.storageBytes() + capacityBytes(lv.stencil, lv.x, lv.b, lv.r, lv.lineCoeffs) +
+    bytes += lv.sys.storageBytes() + static_cast<int64_t>(lv.stencil.bytes()) +
+             capacityBytes(lv.x, lv.b, lv.r, lv.lineCoeffs) +
              capacityBytes(lv.boxRows) +
              static_cast<int64_t>(lv.work.size()) * int64_t(sizeof(double));
     for (const auto& byParity : lv.lines.lines)

@@ -233,7 +233,9 @@ int64_t differingValues(const Image& a, const Image& b) {
 TEST(Filter, OneShotRunsGiveTheInteractiveFiltersImageBitForBit) {
   // The jittered cube has barely covered texels, so the bound (which reads M's neighbours) is
   // exercised; filterTexture forms its right-hand side without InteractiveFilter's stored
-  // products, and the consuming overload frees M and S before the solver's set-up.
+  // products, and the consuming overload frees M and S before the solver's set-up (without a
+  // beta map it forms the right-hand side and the bound column by column as A is formed, also
+  // from operators whose assembly was deferred to then).
   constexpr int kSize = procedural::kAlignedCubeResolution;
   constexpr double kJitter = 0.01;
   const TexturedMesh mesh = procedural::alignedCube(4, kJitter);
@@ -280,6 +282,15 @@ TEST(Filter, OneShotRunsGiveTheInteractiveFiltersImageBitForBit) {
     EXPECT_FALSE(consumed.hasOperators());
     EXPECT_FALSE(consumed.hasImageMaps()) << what;
     EXPECT_EQ(consumed.grid().texelOfUnknown, shared.grid().texelOfUnknown) << "it stays";
+    if (options.betaPerCell.empty()) {  // as texgrad filter builds them without a beta map
+      OperatorOptions deferral = OperatorOptions::assembledOnce();
+      deferral.deferAssembly = true;
+      TexelDomain deferred(mesh, kSize, kSize, deferral);
+      EXPECT_TRUE(deferred.operators().assemblyDeferred());
+      const FilterResult d = filterTexture(deferred, deferred.releaseOperators(), input, options);
+      EXPECT_EQ(differingValues(d.image, expected), 0) << what << ", assembly deferred";
+      EXPECT_FALSE(deferred.hasImageMaps()) << what;
+    }
     if (std::optional<std::vector<uint8_t>> held = exactByteLevels(input)) {
       TexelDomain byLevels(mesh, kSize, kSize);
       Image withoutPixels = input;

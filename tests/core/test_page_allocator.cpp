@@ -1,5 +1,6 @@
 // Core tests: PageAllocator gives large blocks pages of their own and returns them to the
-// system when freed, and a PageVector keeps its values as std::vector does.
+// system when freed, and a PageVector keeps its values as std::vector does; a PageArray's pages
+// become resident as they are written; discarded pages stop being resident.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -23,6 +24,17 @@ namespace {
 /// Bytes of a base page.
 size_t pageBytes() {
   return static_cast<size_t>(sysconf(_SC_PAGESIZE));
+}
+
+/// Number of the base pages of [block, block + bytes) that are resident (mincore).
+size_t residentPages(const void* block, size_t bytes) {
+  const size_t page = pageBytes();
+  const auto begin = reinterpret_cast<uintptr_t>(block) / page * page;
+  const auto end = reinterpret_cast<uintptr_t>(block) + bytes;
+  std::vector<unsigned char> resident((end - begin + page - 1) / page);
+  if (mincore(reinterpret_cast<void*>(begin), end - begin, resident.data()) != 0) return 0;
+  return static_cast<size_t>(std::count_if(resident.begin(), resident.end(),
+                                           [](unsigned char r) { return (r & 1) != 0; }));
 }
 
 /// Number of the base pages of [block, block + bytes) that are mapped in this process (mincore
@@ -75,6 +87,46 @@ TEST(PageAllocator, LargeBlocksAreAlignedAndReturnedToTheSystemWhenFreed) {
   allocator.deallocate(block, count);
   // Gone from the process, every page of it: nothing stays resident.
   EXPECT_EQ(mappedPages(block, bytes), 0u);
+}
+
+TEST(PageAllocator, ArraysBecomeResidentAsTheyAreWritten) {
+  if (!detail::ownPagesAvailable()) GTEST_SKIP() << "every block comes from the heap here";
+  const size_t count = kOwnPagesMinBytes / sizeof(float) * 16;  // 32 MB
+  PageArray<float> array(count);
+  ASSERT_EQ(array.size(), count);
+  EXPECT_EQ(residentPages(array.data(), array.bytes()), 0u) << "nothing written yet";
+  std::fill_n(array.data(), count / 4, 1.0f);
+  // The written quarter, rounded up to a huge page, and no more.
+  const size_t quarter = array.bytes() / 4 / pageBytes();
+  EXPECT_GE(residentPages(array.data(), array.bytes()), quarter);
+  EXPECT_LE(residentPages(array.data(), array.bytes()), quarter + kHugePageBytes / pageBytes());
+  const PageArray<float> moved = std::move(array);
+  EXPECT_EQ(moved.data()[count / 4 - 1], 1.0f);
+  PageArray<float> heap(count, false);  // from the heap: written at once, freed as heap
+  std::fill_n(heap.data(), count, 2.0f);
+  heap = PageArray<float>();
+  EXPECT_EQ(heap.size(), 0u);
+}
+
+TEST(PageAllocator, DiscardedPagesOfAHeapBlockStopBeingResidentAndReadZero) {
+  if (!detail::ownPagesAvailable()) GTEST_SKIP() << "discarding does nothing here";
+  // 64 KB: below glibc's mmap threshold (128 KB at least), so a block of the heap proper.
+  std::vector<double> values(8192, 2.0);
+  const size_t bytes = values.size() * sizeof(double);
+  const size_t before = residentPages(values.data(), bytes);
+  ASSERT_EQ(before, mappedPages(values.data(), bytes)) << "all written, all resident";
+  // The first half less a few bytes: every whole page inside it goes, the partial ones stay.
+  const size_t half = values.size() / 2 - 3;
+  detail::discardWholePages(values.data(), half * sizeof(double));
+  const size_t dropped = before - residentPages(values.data(), bytes);
+  EXPECT_GE(dropped, half * sizeof(double) / pageBytes() - 1);
+  EXPECT_LE(dropped, half * sizeof(double) / pageBytes());
+  const size_t firstWhole =
+      ((reinterpret_cast<uintptr_t>(values.data()) + pageBytes() - 1) / pageBytes() * pageBytes() -
+       reinterpret_cast<uintptr_t>(values.data())) / sizeof(double);
+  EXPECT_EQ(values[firstWhole], 0.0) << "a dropped page reads as zero";
+  EXPECT_EQ(values[half], 2.0) << "past the range: kept";
+  EXPECT_EQ(values.back(), 2.0);
 }
 
 #endif

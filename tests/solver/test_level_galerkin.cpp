@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <span>
 #include <vector>
 
 #include "solver/level_system.h"
@@ -51,21 +52,30 @@ std::vector<T> rowSumsOf(const GridLevel& fine, const Eigen::SparseMatrix<double
   return out;
 }
 
-/// Level 0's data assigned from `a` as the multigrid set-up does, then A^1 from them.
-template <typename T>
-Eigen::SparseMatrix<double> coarseFromLevelData(const GridHierarchy& h,
-                                                const Eigen::SparseMatrix<double>& a) {
-  const GridLevel& fine = h.level(0);
+/// Level 0 classified from `a` and its boundary data assigned, as the multigrid set-up does
+/// before the stencils.
+detail::LevelSystem boundaryAssigned(const GridLevel& fine, const Eigen::SparseMatrix<double>& a) {
   detail::LevelSystem system;
   detail::classifyLevel(fine, a, MultigridOptions().weakRowReach, system);
   detail::indexUnknowns(fine, system);
   detail::assignBoundary(fine, a, system);
   detail::releaseUnknownIndex(system);
-  std::vector<T> stencils;
+  return system;
+}
+
+/// Level 0's data assigned from `a` as the multigrid set-up does, then A^1 from them.
+template <typename T>
+Eigen::SparseMatrix<double> coarseFromLevelData(const GridHierarchy& h,
+                                                const Eigen::SparseMatrix<double>& a) {
+  const GridLevel& fine = h.level(0);
+  const detail::LevelSystem system = boundaryAssigned(fine, a);
+  PageArray<T> stencils;
   detail::assignStencils<T>(fine, a, system, stencils);
   EXPECT_GT(system.interiorCount(), 0);
   EXPECT_GT(system.boundaryCount(), 0);
-  return detail::galerkinFromLevel<T>(fine, system, stencils, rowSumsOf<T>(fine, a), h.level(1));
+  return detail::galerkinFromLevel<T>(fine, system, std::span<const T>(stencils.data(),
+                                                                       stencils.size()),
+                                      rowSumsOf<T>(fine, a), h.level(1));
 }
 
 /// Expects c to have reference's pattern and, per column j, |c_ij - r_ij| <= tolerance *
@@ -156,4 +166,29 @@ TEST(LevelGalerkin, SolverKeepsTheCoarsePatternOfInitForInteriorRowsOfAnyPattern
   Eigen::SparseMatrix<double> handed = a;
   EXPECT_NO_THROW(solver.update(std::move(handed)));
   EXPECT_EQ(solver.levelInfo()[1].nonZeros, a1.nonZeros());
+}
+
+TEST(LevelGalerkin, StencilsNeverReadAColumnTheyDeclaredConsumed) {
+  // The multigrid releases A^0's pages as assignStencils declares columns consumed; here those
+  // columns become NaN instead, so a later read would show in the stencils.
+  const test::SyntheticProblem p = test::multiChartProblem(80);
+  const GridHierarchy h = GridHierarchy::build(p.grid, 4, 16);
+  const GridLevel& fine = h.level(0);
+  const Eigen::SparseMatrix<double> a = p.system(0.01);
+  const detail::LevelSystem system = boundaryAssigned(fine, a);
+  PageArray<float> expected;
+  detail::assignStencils<float>(fine, a, system, expected);
+  Eigen::SparseMatrix<double> poisoned = a;
+  std::vector<int> declared;
+  PageArray<float> stencils;
+  detail::assignStencils<float>(fine, poisoned, system, stencils, [&](int u) {
+    declared.push_back(u);
+    std::fill(poisoned.valuePtr(), poisoned.valuePtr() + poisoned.outerIndexPtr()[u],
+              std::numeric_limits<double>::quiet_NaN());
+  });
+  ASSERT_GT(declared.size(), 2u) << "several bands";
+  EXPECT_TRUE(std::is_sorted(declared.begin(), declared.end()));
+  EXPECT_EQ(declared.back(), fine.unknownCount()) << "every column, in the end";
+  ASSERT_EQ(stencils.size(), expected.size());
+  EXPECT_TRUE(std::equal(stencils.data(), stencils.data() + stencils.size(), expected.data()));
 }

@@ -150,6 +150,27 @@ int64_t sparseBytes(int64_t rows, int64_t nonZeros) {
 
 }  // namespace
 
+TEST(Multigrid, HandedOverMatrixReleasedWhileLevelZeroIsFilledGivesTheSameCycles) {
+  // Large enough for several bands of level 0's stencils (assignStencils) and whole pages of
+  // A^0's arrays: the handed-over A^0's pages are dropped band by band, and a later read of one
+  // would see zeros instead of the values the viewed matrix gives.
+  const test::SyntheticProblem p = test::multiChartProblem(80);
+  const Eigen::MatrixXd b = test::randomBlock(p.mass.rows(), 2, 5);
+  MultigridSolver<float> viewed, handed;
+  const Eigen::SparseMatrix<double> a = p.system(0.01);
+  Eigen::SparseMatrix<double> given = a;
+  viewed.initAndUpdate(p.grid, a);
+  handed.initAndUpdate(p.grid, std::move(given));
+  ASSERT_GE(handed.levelInfo().size(), 2u);
+  MultigridSolver<float>::Matrix x1 = MultigridSolver<float>::Matrix::Zero(b.rows(), 2), x2 = x1;
+  for (int k = 0; k < 2; ++k) {
+    viewed.cycle(b.cast<float>(), x1);
+    handed.cycle(b.cast<float>(), x2);
+  }
+  EXPECT_GT(x1.norm(), 0.0f);
+  EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0f);
+}
+
 TEST(Multigrid, HandedOverMatrixGivesTheSameCyclesAndIsFreedWithLevelZero) {
   // A handed over (a&&) is taken from the caller and gives bit-identical cycles to a view of
   // the caller's A, for initAndUpdate and update alike. While each level l > 0's data are built

@@ -77,10 +77,14 @@ FilterResult filterTexture(const TexelDomain& domain, Image texture, const Filte
 /// As above, for a caller done with the operators: `operators` (the domain's, handed over by
 /// TexelDomain::releaseOperators) are freed once the right-hand side and the system matrix
 /// alpha M + S are formed, before the solver's set-up, so M, S and C (~190 bytes per active
-/// texel) are not held through set-up and solve. If the domain no longer holds operators, the
-/// grid's per-texel maps go too (TexelDomain::releaseImageMaps: ~20 bytes per active texel at
-/// half coverage), all but the texels' class and chart before the solver's hierarchy is built,
-/// those once it exists. Same result, bit for bit.
+/// texel) are not held through set-up and solve. Without a beta map, the right-hand side and
+/// the bound on barely covered texels are formed column by column while M and S become A
+/// (TexelOperators::screenedSystem's visitor), so operators built with
+/// OperatorOptions::deferAssembly are welcome: assembled only then, they never hold S whole. If
+/// the domain no longer holds operators, the grid's per-texel maps go too
+/// (TexelDomain::releaseImageMaps: ~20 bytes per active texel at half coverage), all but the
+/// texels' class and chart before the solver's hierarchy is built, those once it exists. Same
+/// result, bit for bit.
 FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
                            Image texture, const FilterOptions& options,
                            const ProgressCallback& progress = {});

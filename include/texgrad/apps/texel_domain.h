@@ -31,7 +31,8 @@ class TexelDomain {
   const TexelGrid& grid() const { return grid_; }
   /// The operators; throws InvalidInputError once releaseOperators() has handed them over.
   const TexelOperators& operators() const;
-  /// Hands the operators (M, S, C, the piece integrals: ~190 bytes per active texel) over to
+  /// Hands the operators (M, S, C, the piece integrals: ~190 bytes per active texel; only the
+  /// pattern if built with OperatorOptions::deferAssembly) over to
   /// the caller, who may free them once a solver holds what it needs (filterTexture's consuming
   /// overload); mesh, atlas and grid stay. The returned object refers to this domain's mesh and
   /// grid, so it must not outlive the domain. Throws InvalidInputError if already handed over.
@@ -46,7 +47,8 @@ class TexelDomain {
   /// but those `kept`, keeping its size, placement and texelOfUnknown, for a one-shot caller
   /// once nothing reads them: filterTexture's consuming overload frees all but the class and
   /// chart before its solver builds its hierarchy, and those after. Throws InvalidInputError
-  /// while the domain holds its operators (they were built from them).
+  /// while the domain holds its operators (they were built from them; a deferred assembly,
+  /// TexelOperators::screenedSystem, reads them too: free them after it).
   void releaseImageMaps(KeptMaps kept = KeptMaps::None);
   /// False once releaseImageMaps() has freed the grid's maps.
   bool hasImageMaps() const { return !grid_.texelClass.empty(); }

@@ -46,6 +46,10 @@ struct OperatorOptions {
   /// of cell rows at a time, into the same M and S bit for bit, for callers that only use M, S
   /// and the products below.
   bool keepPieceIntegrals = true;
+  /// Stop the constructor once the pattern is built: M and S are assembled later, by the
+  /// visiting TexelOperators::screenedSystem, straight into alpha M + S without ever holding S
+  /// whole (docs/memory.md). Needs keepPieceIntegrals = false.
+  bool deferAssembly = false;
   /// Checks the options; throws InvalidInputError naming the bad field.
   void validate() const;
   /// Defaults for callers that never re-assemble (no setMetric or modulatedStiffness): the
@@ -62,6 +66,17 @@ using SurfaceOneForm = std::function<Eigen::Vector2d(const fem::SurfacePoint&)>;
 /// An entry of a matrix formed from M and S on their shared pattern: (row, column, M_rc, S_rc).
 using EntryCombination =
     std::function<double(Eigen::Index row, Eigen::Index column, double mass, double stiffness)>;
+
+/// One complete column of M and of S (their rows too: both are symmetric), as the visiting
+/// TexelOperators::screenedSystem hands it out before combining it into alpha M + S.
+struct OperatorColumn {
+  int column = 0;                     ///< the unknown
+  std::span<const int> rows;          ///< its rows, ascending (the shared pattern)
+  std::span<const double> mass;       ///< M's entries at those rows
+  std::span<const double> stiffness;  ///< S's entries at those rows (S 1 = 0 formed)
+};
+/// Sees each column of M and S once; called concurrently for different columns (may be empty).
+using ColumnVisitor = std::function<void(const OperatorColumn&)>;
 
 /// A mass and a stiffness matrix on the same unknowns (TexelOperators::assembledFor,
 /// buildMassStiffness).
@@ -128,6 +143,20 @@ class TexelOperators {
   /// that has no further use for M and S never holds a second copy of their pattern (117 bytes
   /// per active texel at spot 2048², docs/memory.md).
   static SparseMatrixd screenedSystem(std::unique_ptr<TexelOperators> operators, double alpha);
+  /// screenedSystem(operators, alpha) that first shows `visit` each column of M and S: what a
+  /// one-shot caller computes from them (a right-hand side) needs neither kept. Operators built
+  /// with OperatorOptions::deferAssembly are assembled here (progress stage "assemble"), a
+  /// window of cell rows at a time, each column of S held only until it is complete (S's 74
+  /// bytes per active texel are never held whole); the same values, bit for bit, as assembling
+  /// them first. Throws InvalidInputError if the grid's per-texel maps, which a deferred
+  /// assembly reads, were freed.
+  static SparseMatrixd screenedSystem(std::unique_ptr<TexelOperators> operators, double alpha,
+                                      const ColumnVisitor& visit,
+                                      const ProgressCallback& progress = {});
+  /// True while the assembly of operators built with OperatorOptions::deferAssembly has not
+  /// run: mass(), stiffness(), seamContinuity() and the products formed from them throw
+  /// InvalidInputError until then (the pattern, texelPairs() and differential() are there).
+  bool assemblyDeferred() const;
   /// One matrix on M's pattern with entry (r, c) = combine(r, c, M_rc, S_rc): the system matrix
   /// of an app that weighs M and S entry by entry (stitching's alpha W M W + S).
   SparseMatrixd combined(const EntryCombination& combine) const;
@@ -159,7 +188,8 @@ class TexelOperators {
   /// Assembly diagnostics.
   const OperatorReport& report() const;
   /// Bytes held in the operators' containers: M, S's values, C, the piece integrals while kept,
-  /// per-face metric data (docs/memory.md). The basis, which scales with the mesh, is left out.
+  /// a deferred assembly's plan, per-face metric data (docs/memory.md). The basis, which scales
+  /// with the mesh, is left out.
   int64_t storageBytes() const;
 
  private:
