@@ -376,7 +376,7 @@ void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSyste
   for (const std::vector<SlotRow>& rows : system.rows)
     for (const SlotRow& row : rows) runs.emplace_back(level.pointOfSlot(row.begin).y, &row);
   std::sort(runs.begin(), runs.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
+            [](const auto& p, const auto& q) { return p.first < q.first; });
   for (size_t first = 0; first < runs.size();) {
     const int end = runs[first].first + kStencilBandRows;
     size_t last = first;
