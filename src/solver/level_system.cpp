@@ -293,7 +293,8 @@ void releaseUnknownIndex(LevelSystem& system) {
   std::vector<int32_t>().swap(system.interiorUnknowns);
 }
 
-void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system) {
+void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system,
+                    Eigen::SparseMatrix<double>& block) {
   // Counted first so every array is allocated once at its exact size, then filled on all cores.
   const int nb = system.boundaryCount();
   SlotCsr& rows = system.boundaryRows;
@@ -320,7 +321,9 @@ void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& sys
     }
   });
   assignInteriorNextToBoundary(level, a, system);
-  if (nb > 0) system.boundarySolver.factorize(boundaryBlock(level, a, system));
+  Eigen::SparseMatrix<double> bb =
+      nb > 0 ? boundaryBlock(level, a, system) : Eigen::SparseMatrix<double>();
+  block.swap(bb);
 }
 
 namespace {

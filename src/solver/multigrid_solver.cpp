@@ -210,8 +210,8 @@ struct MultigridSolver<Scalar>::Impl {
   /// data are filled in, so the product's temporaries never coexist with them, and A^l is freed
   /// once both exist. Level 0 goes the other way in the numeric phase: its data are filled in
   /// from A^0, then A^0 is freed if handed over (`handedOver`: the matrix a0 views, owned by the
-  /// walk), then A^1 is formed from level 0's data (galerkinFromLevel), so A^0 and A^1 never
-  /// coexist (docs/memory.md). The symbolic phase alone has no level-0 data and forms A^1 from
+  /// walk), then its boundary block is factorised, then A^1 is formed from level 0's data
+  /// (galerkinFromLevel), so A^0 coexists with neither A^1 nor a factorisation (docs/memory.md). The symbolic phase alone has no level-0 data and forms A^1 from
   /// A^0's pattern: the same pattern (galerkinFromLevel).
   void walkLevels(const SparseSum& a0, bool symbolicPhase, bool numericPhase,
                   Eigen::SparseMatrix<double>* handedOver = nullptr) {
@@ -245,6 +245,7 @@ struct MultigridSolver<Scalar>::Impl {
       Eigen::SparseMatrix<double> next = l < coarsest() && !fromLevelData
                                              ? galerkinProduct(a, grid, hierarchy.level(l + 1))
                                              : Eigen::SparseMatrix<double>();
+      Eigen::SparseMatrix<double> boundaryBlock;  // A_bb^l, factorised once A^l is released
       if (l < coarsest() || l == 0) {
         // Weak rows pull in their neighbours on the texel grid only: there they come from
         // texels their chart barely covers; coarse Galerkin rows of boundary nodes are often
@@ -255,7 +256,7 @@ struct MultigridSolver<Scalar>::Impl {
         if (numericPhase) {
           detail::indexUnknowns(grid, lv.sys);
           if (l == 0) assignRowSums(grid, a);
-          detail::assignBoundary(grid, a, lv.sys);
+          detail::assignBoundary(grid, a, lv.sys, boundaryBlock);
           detail::assignLines<T>(grid, a, lv.sys, options.lineRatio, lv.lines, lv.lineCoeffs);
         }
         // The cycles never read the unknown index, nor does assignStencils: it goes before the
@@ -280,6 +281,12 @@ struct MultigridSolver<Scalar>::Impl {
       // level 0 from its data, a handed-over A^0 and then A^1, never both.
       const int64_t handedBytes = l == 0 && handedOver ? sparseBytes(*handedOver) : 0;
       if (l == 0 && handedOver) Eigen::SparseMatrix<double>().swap(*handedOver);  // A^0
+      // Factorised only now: CHOLMOD's copy of A_bb^0 and its factor's work (10-20 bytes per
+      // texel) never coexist with a handed-over A^0 (docs/memory.md).
+      if (boundaryBlock.rows() > 0) {
+        lv.sys.boundarySolver.factorize(boundaryBlock);
+        Eigen::SparseMatrix<double>().swap(boundaryBlock);
+      }
       if (fromLevelData) {
         Eigen::SparseMatrix<double> formed =
             detail::galerkinFromLevel(grid, lv.sys, std::span<const T>(lv.stencil.data(),
@@ -498,8 +505,8 @@ struct MultigridSolver<Scalar>::Impl {
   }
 
   /// z = V(r): one V-cycle from zero on level 0's vectors, z in double or Scalar.
-  template <typename Dst>
-  void preconditionTo(const Eigen::MatrixXd& r, Dst& z) {
+  template <typename Src, typename Dst>
+  void preconditionTo(const Src& r, Dst& z) {
     z.resize(r.rows(), r.cols());
     arena.execute([&] {
       ensureChannels(static_cast<int>(r.cols()));
@@ -709,6 +716,11 @@ void MultigridSolver<Scalar>::precondition(const Eigen::MatrixXd& r, Eigen::Matr
 
 template <typename Scalar>
 void MultigridSolver<Scalar>::preconditionInto(const Eigen::MatrixXd& r, Matrix& z) const {
+  impl_->preconditionTo(r, z);
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::preconditionInto(const Eigen::MatrixXf& r, Matrix& z) const {
   impl_->preconditionTo(r, z);
 }
 

@@ -58,8 +58,10 @@ detail::LevelSystem boundaryAssigned(const GridLevel& fine, const Eigen::SparseM
   detail::LevelSystem system;
   detail::classifyLevel(fine, a, MultigridOptions().weakRowReach, system);
   detail::indexUnknowns(fine, system);
-  detail::assignBoundary(fine, a, system);
+  Eigen::SparseMatrix<double> block;
+  detail::assignBoundary(fine, a, system, block);
   detail::releaseUnknownIndex(system);
+  if (block.rows() > 0) system.boundarySolver.factorize(block);
   return system;
 }
 
