@@ -303,18 +303,18 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
   if (mapsOwner) mapsOwner->releaseImageMaps();
   solver->initAndUpdate(std::move(problem.system), progress);
   FilterResult result;
-  // Each channel's solution is kept as floats, the image's own type, until all are solved (half
-  // the bytes of doubles while the later channels solve): bounded and scattered into float
-  // pixels, the result is the same bits (the bound only clamps, and rounding is monotone).
-  std::vector<Eigen::VectorXf> solved(rhs.size());
+  // Each channel is solved on float b and x (SystemSolver::floatIterates: CG keeps its iterate
+  // and residual in float too, by default), and its solution kept as floats, the image's own
+  // type, until all are solved.
+  std::vector<Eigen::MatrixXf> solved(rhs.size());
   result.report = solveEachChannel(
       x0.channels(), progress, [&](int c, const ProgressCallback& channelProgress) {
         const auto k = static_cast<size_t>(c);
-        Eigen::MatrixXd channel = x0.channel(c).cast<double>();  // the initial guess
-        const Eigen::MatrixXd b = rhs[k].cast<double>();
+        Eigen::MatrixXf channel = x0.channel(c);  // the initial guess
+        const Eigen::MatrixXf b = Eigen::Map<const Eigen::MatrixXf>(rhs[k].data(), rhs[k].size(), 1);
         rhs[k] = Eigen::VectorXf();
         const SolveReport report = solver->solve(b, channel, channelProgress);
-        solved[k] = channel.col(0).cast<float>();
+        solved[k] = std::move(channel);
         return report;
       });
   result.initSeconds = solver->initSeconds();

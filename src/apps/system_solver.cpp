@@ -592,6 +592,31 @@ SolveReport SystemSolver::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
   return impl_->run(b, x, count, progress);
 }
 
+SolveReport SystemSolver::solve(const Eigen::MatrixXf& b, Eigen::MatrixXf& x,
+                                const ProgressCallback& progress) {
+  if (!floatIterates()) {
+    const Eigen::MatrixXd bd = b.cast<double>();
+    Eigen::MatrixXd xd = x.rows() == b.rows() && x.cols() == b.cols()
+                             ? Eigen::MatrixXd(x.cast<double>())
+                             : Eigen::MatrixXd::Zero(b.rows(), b.cols());
+    const SolveReport report = solve(bd, xd, progress);
+    x = xd.cast<float>();
+    return report;
+  }
+  if (x.rows() != b.rows() || x.cols() != b.cols()) x = Eigen::MatrixXf::Zero(b.rows(), b.cols());
+  CgOptions options;
+  options.maxIterations = impl_->settings.maxIterations;
+  options.tolerance = impl_->settings.effectiveTolerance();
+  return conjugateGradient(multigridOperator<float, float>(*impl_->multigridFloat), b, x, options,
+                           progress);
+}
+
+bool SystemSolver::floatIterates() const {
+  const SolverSettings& s = impl_->settings;
+  return s.kind == SolverKind::MultigridCg && impl_->multigridFloat &&
+         s.cgUsesLevelZeroOperator() && s.effectiveTolerance() >= kFloatIterateTolerance;
+}
+
 SolveReport SystemSolver::step(const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
                                const ProgressCallback& progress) {
   return impl_->run(b, x, 1, progress);

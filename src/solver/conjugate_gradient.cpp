@@ -100,11 +100,12 @@ void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
   productInto(a, x, y, [scale](double sum) { return static_cast<float>(scale * sum); });
 }
 
-template <typename Scalar>
-SolveReport conjugateGradient(const CgOperator<Scalar>& a, const Eigen::MatrixXd& b,
-                              Eigen::MatrixXd& x, const CgOptions& options,
-                              const ProgressCallback& progress) {
-  using Block = typename CgOperator<Scalar>::Block;
+template <typename Scalar, typename Iterate>
+SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
+                              const typename CgOperator<Scalar, Iterate>::Vectors& b,
+                              typename CgOperator<Scalar, Iterate>::Vectors& x,
+                              const CgOptions& options, const ProgressCallback& progress) {
+  using Block = typename CgOperator<Scalar, Iterate>::Block;
   options.validate();
   if (b.rows() != a.rows || x.rows() != b.rows() || x.cols() != b.cols())
     throw InvalidInputError("conjugateGradient: A is " + std::to_string(a.rows) + " x " +
@@ -118,10 +119,10 @@ SolveReport conjugateGradient(const CgOperator<Scalar>& a, const Eigen::MatrixXd
   const double scale = bNorm > 0.0 ? 1.0 / bNorm : 1.0;
   // w holds A p until x and r have taken their step, then M⁻¹ r until p has taken it: one block
   // for both (the classic four work vectors in three).
-  Eigen::MatrixXd r;
+  typename CgOperator<Scalar, Iterate>::Vectors r;
   Block p, w;
   auto start = Clock::now();
-  if constexpr (std::is_same_v<Scalar, double>) {
+  if constexpr (std::is_same_v<Scalar, Iterate>) {
     a.product(x, w);
     r = b - w;
   } else {
@@ -158,8 +159,9 @@ SolveReport conjugateGradient(const CgOperator<Scalar>& a, const Eigen::MatrixXd
       requirePositive(pap(c), !p.col(c).isZero(0.0), "p^T A p", "the matrix", c, report.iterations);
       alpha(c) = pap(c) > 0.0 ? rz(c) / pap(c) : 0.0;
     }
-    x.noalias() += p.template cast<double>() * alpha.asDiagonal();
-    r.noalias() -= w.template cast<double>() * alpha.asDiagonal();
+    const Eigen::Matrix<Iterate, 1, Eigen::Dynamic> step = alpha.template cast<Iterate>();
+    x.noalias() += p.template cast<Iterate>() * step.asDiagonal();
+    r.noalias() -= w.template cast<Iterate>() * step.asDiagonal();
     report.rmsChange.push_back((p.template cast<double>() * alpha.asDiagonal()).norm() /
                                std::sqrt(std::max<double>(1.0, double(p.size()))));
     report.times.other += secondsSince(start);
@@ -181,7 +183,7 @@ SolveReport conjugateGradient(const CgOperator<Scalar>& a, const Eigen::MatrixXd
       bestResidual = residual;
       best = x.template cast<Scalar>();
     } else if (residual > kCgDivergenceGrowth * bestResidual) {
-      x = best.template cast<double>();
+      x = best.template cast<Iterate>();
       report.diverged = true;
       break;
     }
@@ -191,12 +193,15 @@ SolveReport conjugateGradient(const CgOperator<Scalar>& a, const Eigen::MatrixXd
   return report;
 }
 
-template SolveReport conjugateGradient<float>(const CgOperator<float>&, const Eigen::MatrixXd&,
-                                              Eigen::MatrixXd&, const CgOptions&,
-                                              const ProgressCallback&);
-template SolveReport conjugateGradient<double>(const CgOperator<double>&, const Eigen::MatrixXd&,
-                                               Eigen::MatrixXd&, const CgOptions&,
-                                               const ProgressCallback&);
+template SolveReport conjugateGradient<float, double>(const CgOperator<float>&,
+                                                      const Eigen::MatrixXd&, Eigen::MatrixXd&,
+                                                      const CgOptions&, const ProgressCallback&);
+template SolveReport conjugateGradient<double, double>(const CgOperator<double>&,
+                                                       const Eigen::MatrixXd&, Eigen::MatrixXd&,
+                                                       const CgOptions&, const ProgressCallback&);
+template SolveReport conjugateGradient<float, float>(const CgOperator<float, float>&,
+                                                     const Eigen::MatrixXf&, Eigen::MatrixXf&,
+                                                     const CgOptions&, const ProgressCallback&);
 
 SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,
                               Eigen::MatrixXd& x, const Preconditioner& preconditioner,

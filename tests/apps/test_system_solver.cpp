@@ -93,6 +93,36 @@ TEST(SystemSolver, CgStopsAtItsOwnIterationLimitAndItsDocumentedTolerance) {
   EXPECT_EQ(cg(1, 200, SolverSettings::kDefaultCgTolerance).iterations, byDefault.iterations);
 }
 
+TEST(SystemSolver, FloatSolveIteratesInFloatOnlyWhereItReachesTheTolerance) {
+  const test::SyntheticProblem p = test::multiChartProblem(24);
+  const Eigen::SparseMatrix<double> a = p.system(1e2);
+  const Eigen::MatrixXd b = test::randomBlock(a.rows(), 1, 3);
+  const Eigen::MatrixXd exact = directSolution(a, b);
+  for (const double tolerance : {1e-4, kFloatIterateTolerance, 1e-6}) {
+    SolverSettings settings;
+    settings.kind = SolverKind::MultigridCg;
+    settings.tolerance = tolerance;
+    SystemSolver solver(p.grid, settings);
+    solver.initAndUpdate(a);
+    EXPECT_EQ(solver.floatIterates(), tolerance >= kFloatIterateTolerance) << tolerance;
+    Eigen::MatrixXf x;  // empty: solved from zero
+    const SolveReport report = solver.solve(Eigen::MatrixXf(b.cast<float>()), x);
+    ASSERT_TRUE(report.converged) << report.toString();
+    // b - A x in double, for the float x returned, within 1.5 times the tolerance.
+    EXPECT_LT(relativeResidual(a, b, x.cast<double>()), 1.5 * tolerance) << tolerance;
+    EXPECT_LT((x.cast<double>() - exact).norm() / exact.norm(), 100 * tolerance) << tolerance;
+  }
+  // Other kinds solve on double copies: the same iterate as the double solve, rounded.
+  SystemSolver multigrid(p.grid, floatMultigrid());
+  multigrid.initAndUpdate(a);
+  EXPECT_FALSE(multigrid.floatIterates());
+  Eigen::MatrixXd xd = Eigen::MatrixXd::Zero(a.rows(), 1);
+  multigrid.solve(b, xd);
+  Eigen::MatrixXf xf = Eigen::MatrixXf::Zero(a.rows(), 1);
+  multigrid.solve(Eigen::MatrixXf(b.cast<float>()), xf);
+  EXPECT_LT((xf.cast<double>() - xd).norm() / xd.norm(), 1e-6);
+}
+
 TEST(SystemSolver, SettingsRefuseValuesOutsideTheirRanges) {
   auto message = [](const std::function<void(SolverSettings&)>& set) {
     SolverSettings settings;

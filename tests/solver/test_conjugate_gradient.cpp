@@ -174,3 +174,40 @@ TEST(ConjugateGradient, FloatLevelZeroOperatorKeepsTheSmallRowSumsOfAScreenedSys
   EXPECT_EQ(report.iterations, reference.iterations);
   EXPECT_LT((a * onStencils - b).norm() / b.norm(), 2e-6);
 }
+
+TEST(ConjugateGradient, FloatIteratesReachTheirToleranceInTheTrueResidual) {
+  // The filter's kind of system (alpha M + S, alpha M small next to S) and a strongly
+  // anisotropic one: CG with float iterate and residual, from zero and from a rough guess,
+  // stops where its residual says the true one, b - A x in double, is at the tolerance, after
+  // about as many iterations as with double iterates.
+  struct Case {
+    test::SyntheticProblem problem;
+    double screening;
+  };
+  const Case cases[] = {{test::squareProblem(128), 10.0},
+                        {test::squareProblem(128, 1.0, 1e-3), 1e-3}};
+  for (const Case& c : cases) {
+    const Eigen::SparseMatrix<double> a = c.problem.system(c.screening);
+    MultigridSolver<float> mg;
+    mg.initAndUpdate(c.problem.grid, a);
+    const Eigen::Index n = a.rows();
+    const Eigen::MatrixXd b = a * test::randomBlock(n, 1, 4);
+    const CgOptions options{300, kFloatIterateTolerance};
+    for (const bool fromZero : {true, false}) {
+      const Eigen::MatrixXd start = fromZero ? Eigen::MatrixXd::Zero(n, 1)
+                                             : Eigen::MatrixXd(test::randomBlock(n, 1, 8));
+      Eigen::MatrixXd xd = start;
+      const SolveReport doubled = conjugateGradient(multigridOperator(mg), b, xd, options);
+      Eigen::MatrixXf xf = start.cast<float>();
+      const Eigen::MatrixXf bf = b.cast<float>();
+      const SolveReport floated =
+          conjugateGradient(multigridOperator<float, float>(mg), bf, xf, options);
+      ASSERT_TRUE(floated.converged) << floated.toString();
+      const double trueResidual = (b - a * xf.cast<double>()).norm() / b.norm();
+      EXPECT_LT(trueResidual, 1.5 * kFloatIterateTolerance)
+          << "screening " << c.screening << (fromZero ? ", from zero" : ", from a guess");
+      EXPECT_LE(std::abs(floated.iterations - doubled.iterations), 1)
+          << floated.toString() << "\n" << doubled.toString();
+    }
+  }
+}

@@ -44,32 +44,49 @@ void residualOfDoubleIterate(const Apply& apply, const Eigen::MatrixXd& b, const
 }
 
 /// A CG system given by its actions on n x k blocks, so that A need not be stored as a matrix.
-/// Directions p, products A p and preconditioned residuals z are Scalar blocks; the iterate, the
-/// residual and every dot product and norm stay double. Float halves the work vectors' memory and
-/// loses nothing with a float multigrid, whose V-cycle and level-0 operator give float results.
-template <typename Scalar>
+/// Directions p, products A p and preconditioned residuals z are Scalar blocks; the iterate X,
+/// the right-hand side B and the residual are Iterate blocks (double by default; every dot
+/// product and norm is double either way). Float halves the work vectors' memory and loses
+/// nothing with a float multigrid, whose V-cycle and level-0 operator give float results; a
+/// float iterate and residual (Iterate = float) halve those too, for tolerances of
+/// kFloatIterateTolerance and above.
+template <typename Scalar, typename Iterate = double>
 struct CgOperator {
   /// n x k block of the work precision.
   using Block = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+  /// n x k block of the iterate's precision (X, B, the residual).
+  using Vectors = Eigen::Matrix<Iterate, Eigen::Dynamic, Eigen::Dynamic>;
   Eigen::Index rows = 0;                                   ///< n
   std::function<void(const Block& p, Block& ap)> product;  ///< ap = A p (A SPD)
   /// z = M⁻¹ r (M SPD); an empty function means z = r.
-  std::function<void(const Eigen::MatrixXd& r, Block& z)> preconditioner;
+  std::function<void(const Vectors& r, Block& z)> preconditioner;
 };
 
+/// The smallest tolerance for CG with float iterates (CgOperator<float, float>): their residual,
+/// updated in float, drifts from b - A x by some 1e-7 of |b| per hundred iterations, well below
+/// this.
+inline constexpr double kFloatIterateTolerance = 1e-5;
+
 /// Preconditioned CG on `a` as conjugateGradient below, with three n x k work blocks (the
-/// residual in double, the direction and one shared for A p and M⁻¹ r in Scalar) and the best
+/// residual in Iterate, the direction and one shared for A p and M⁻¹ r in Scalar) and the best
 /// iterate kept in Scalar (returned, rounded to Scalar, if the residual diverges).
-template <typename Scalar>
-SolveReport conjugateGradient(const CgOperator<Scalar>& a, const Eigen::MatrixXd& b,
-                              Eigen::MatrixXd& x, const CgOptions& options = {},
-                              const ProgressCallback& progress = {});
-extern template SolveReport conjugateGradient<float>(const CgOperator<float>&,
-                                                     const Eigen::MatrixXd&, Eigen::MatrixXd&,
-                                                     const CgOptions&, const ProgressCallback&);
-extern template SolveReport conjugateGradient<double>(const CgOperator<double>&,
-                                                      const Eigen::MatrixXd&, Eigen::MatrixXd&,
-                                                      const CgOptions&, const ProgressCallback&);
+template <typename Scalar, typename Iterate>
+SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
+                              const typename CgOperator<Scalar, Iterate>::Vectors& b,
+                              typename CgOperator<Scalar, Iterate>::Vectors& x,
+                              const CgOptions& options = {}, const ProgressCallback& progress = {});
+extern template SolveReport conjugateGradient<float, double>(const CgOperator<float>&,
+                                                             const Eigen::MatrixXd&,
+                                                             Eigen::MatrixXd&, const CgOptions&,
+                                                             const ProgressCallback&);
+extern template SolveReport conjugateGradient<double, double>(const CgOperator<double>&,
+                                                              const Eigen::MatrixXd&,
+                                                              Eigen::MatrixXd&, const CgOptions&,
+                                                              const ProgressCallback&);
+extern template SolveReport conjugateGradient<float, float>(const CgOperator<float, float>&,
+                                                            const Eigen::MatrixXf&,
+                                                            Eigen::MatrixXf&, const CgOptions&,
+                                                            const ProgressCallback&);
 
 /// Solves A X = B (A n x n SPD with both triangles stored; B, X n x k) by preconditioned CG, one
 /// independent recurrence per column, starting from X. Non-convergence is reported, not thrown;
@@ -91,17 +108,18 @@ Preconditioner multigridPreconditioner(const MultigridSolver<Scalar>& solver) {
 }
 
 /// A applied by the multigrid's level-0 operator (MultigridSolver::applyOperator) and
-/// preconditioned by one V-cycle from zero, both in the cycle precision: CG with no copy of A.
-/// `solver` must outlive the result.
-template <typename Scalar>
-CgOperator<Scalar> multigridOperator(const MultigridSolver<Scalar>& solver) {
-  CgOperator<Scalar> op;
+/// preconditioned by one V-cycle from zero, both in the cycle precision, for iterates in
+/// Iterate: CG with no copy of A. `solver` must outlive the result.
+template <typename Scalar, typename Iterate = double>
+CgOperator<Scalar, Iterate> multigridOperator(const MultigridSolver<Scalar>& solver) {
+  using Operator = CgOperator<Scalar, Iterate>;
+  Operator op;
   op.rows = solver.hierarchy().levelCount() > 0 ? solver.hierarchy().level(0).unknownCount() : 0;
-  op.product = [&solver](const typename CgOperator<Scalar>::Block& p,
-                         typename CgOperator<Scalar>::Block& ap) { solver.applyOperator(p, ap); };
-  op.preconditioner = [&solver](const Eigen::MatrixXd& r, typename CgOperator<Scalar>::Block& z) {
-    solver.preconditionInto(r, z);
+  op.product = [&solver](const typename Operator::Block& p, typename Operator::Block& ap) {
+    solver.applyOperator(p, ap);
   };
+  op.preconditioner = [&solver](const typename Operator::Vectors& r,
+                                typename Operator::Block& z) { solver.preconditionInto(r, z); };
   return op;
 }
 

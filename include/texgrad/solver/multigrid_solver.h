@@ -144,6 +144,8 @@ class MultigridSolver {
   void precondition(const Eigen::MatrixXd& r, Eigen::MatrixXd& z) const;
   /// As precondition, with z in the cycle precision (which holds the cycle's result exactly).
   void preconditionInto(const Eigen::MatrixXd& r, Matrix& z) const;
+  /// As preconditionInto, for a float r (CG with float iterates: no double copy of r).
+  void preconditionInto(const Eigen::MatrixXf& r, Matrix& z) const;
   /// y = A x (n x k) with the level-0 operator the cycles hold (no copy of A): interior rows
   /// from their stencils in difference form, sum_k w_k (x_k - x_u) + (row sum of A) x_u,
   /// boundary rows in double; x is rounded to Scalar, sums are formed in double. Float stencils
