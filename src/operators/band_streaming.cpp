@@ -25,7 +25,7 @@ namespace {
 /// Windows per build: about 1/kWindows of the plain pieces are held at a time, and a face is
 /// clipped once more for every window border it crosses (faces scale with the texture, so the
 /// share of such faces does not grow with it).
-constexpr int kWindows = 16;
+constexpr int kWindows = 64;
 
 /// Bands per window: even (see windowOf), about bandCount / kWindows, at least 2.
 int windowBands(int bandCount) {

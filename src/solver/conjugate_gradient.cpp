@@ -144,8 +144,10 @@ SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
     requirePositive(rz(c), !r.col(c).isZero(0.0), "r^T z", "the preconditioner", c, -1);
   report.residuals.push_back(r.norm() * scale);
   requireFinite(r, "the residual of the initial guess (A holds non-finite values)");
-  // The iterate with the smallest residual, returned if the residual then diverges.
-  Block best = x.template cast<Scalar>();
+  // The iterate with the smallest residual, returned if the residual then diverges. While the
+  // residuals fall that is the current iterate, so it is copied (one n x k block) only once
+  // they rise: then it is the iterate before the step just taken, x minus that step.
+  Block best;
   double bestResidual = report.residuals.back();
   while (report.iterations < options.maxIterations && report.residuals.back() > options.tolerance) {
     reportSolveProgress(progress, report, options.maxIterations, options.tolerance);
@@ -164,6 +166,9 @@ SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
     r.noalias() -= w.template cast<Iterate>() * step.asDiagonal();
     report.rmsChange.push_back((p.template cast<double>() * alpha.asDiagonal()).norm() /
                                std::sqrt(std::max<double>(1.0, double(p.size()))));
+    const double residual = r.norm() * scale;
+    if (residual >= bestResidual && best.size() == 0)  // p is still the step's direction
+      best = (x - p.template cast<Iterate>() * step.asDiagonal()).template cast<Scalar>();
     report.times.other += secondsSince(start);
     precondition();
     start = Clock::now();
@@ -176,12 +181,11 @@ SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
     }
     rz = rzNew;
     ++report.iterations;
-    const double residual = r.norm() * scale;
     report.residuals.push_back(residual);
     report.times.other += secondsSince(start);
     if (residual < bestResidual) {
       bestResidual = residual;
-      best = x.template cast<Scalar>();
+      if (best.size() != 0) best = x.template cast<Scalar>();
     } else if (residual > kCgDivergenceGrowth * bestResidual) {
       x = best.template cast<Iterate>();
       report.diverged = true;

@@ -293,8 +293,7 @@ void releaseUnknownIndex(LevelSystem& system) {
   std::vector<int32_t>().swap(system.interiorUnknowns);
 }
 
-void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system,
-                    Eigen::SparseMatrix<double>& block) {
+void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system) {
   // Counted first so every array is allocated once at its exact size, then filled on all cores.
   const int nb = system.boundaryCount();
   SlotCsr& rows = system.boundaryRows;
@@ -321,9 +320,43 @@ void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& sys
     }
   });
   assignInteriorNextToBoundary(level, a, system);
-  Eigen::SparseMatrix<double> bb =
-      nb > 0 ? boundaryBlock(level, a, system) : Eigen::SparseMatrix<double>();
-  block.swap(bb);
+}
+
+void factoriseBoundary(const GridLevel& level, LevelSystem& system) {
+  const int nb = system.boundaryCount();
+  if (nb == 0) return;
+  const SlotCsr& rows = system.boundaryRows;
+  const auto blockBegin = [&](int j) { return system.offBlockEnd[static_cast<size_t>(j)]; };
+  const auto blockEnd = [&](int j) { return rows.ptr[static_cast<size_t>(j) + 1]; };
+  int64_t total = 0;
+  for (int j = 0; j < nb; ++j) total += blockEnd(j) - blockBegin(j);
+  if (total > std::numeric_limits<int>::max())
+    throw InvalidInputError("multigrid: the boundary block has more than 2^31 non-zeros");
+  Eigen::SparseMatrix<double> bb(nb, nb);
+  bb.resizeNonZeros(static_cast<Eigen::Index>(total));
+  bb.outerIndexPtr()[0] = 0;
+  for (int j = 0; j < nb; ++j)
+    bb.outerIndexPtr()[j + 1] = bb.outerIndexPtr()[j] + static_cast<int>(blockEnd(j) - blockBegin(j));
+  // Row j's A_bb entries are its boundary columns in the order of A's row, by increasing
+  // unknown, as the compact indices are (classifyLevel): each is found by a binary search over
+  // the boundary unknowns, and every column of the block comes out sorted, as boundaryBlock's.
+  tbb::parallel_for(0, nb, [&](int j) {
+    int out = bb.outerIndexPtr()[j];
+    for (int64_t e = blockBegin(j); e != blockEnd(j); ++e) {
+      const int u = level.unknownOfSlot[static_cast<size_t>(rows.col[static_cast<size_t>(e)])];
+      int lo = 0, hi = nb;
+      while (lo < hi) {
+        const int mid = lo + (hi - lo) / 2;
+        if (unknownOfBoundary(level, system, mid) < u)
+          lo = mid + 1;
+        else
+          hi = mid;
+      }
+      bb.innerIndexPtr()[out] = lo;
+      bb.valuePtr()[out++] = rows.val[static_cast<size_t>(e)];
+    }
+  });
+  system.boundarySolver.factorize(bb);
 }
 
 namespace {

@@ -112,11 +112,13 @@ void indexUnknowns(const GridLevel& level, LevelSystem& system);
 /// Frees boundaryOfUnknown and interiorUnknowns (8 bytes per unknown) between set-ups.
 void releaseUnknownIndex(LevelSystem& system);
 
-/// Numeric phase for the boundary: fills boundaryRows / offBlockEnd, and `block` with A_bb^l
-/// for the caller to factorise (system.boundarySolver) once it no longer holds `a`: the
-/// factorisation's work then never coexists with a handed-over A^0. Needs indexUnknowns.
-void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system,
-                    Eigen::SparseMatrix<double>& block);
+/// Numeric phase for the boundary: fills boundaryRows / offBlockEnd. Needs indexUnknowns.
+void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system);
+
+/// Factorises A_bb^l (system.boundarySolver), read from the assigned boundary rows rather than
+/// from A: a caller can release A first, so that a handed-over A^0 never coexists with CHOLMOD's
+/// copy of the block and the factorisation's work.
+void factoriseBoundary(const GridLevel& level, LevelSystem& system);
 
 /// Numeric phase for the interior: the stencil planes of every run (see SlotRow) from the rows of
 /// `a` at interior unknowns; the other slots of a run get zero coefficients and mask 0. The runs

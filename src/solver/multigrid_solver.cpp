@@ -245,7 +245,6 @@ struct MultigridSolver<Scalar>::Impl {
       Eigen::SparseMatrix<double> next = l < coarsest() && !fromLevelData
                                              ? galerkinProduct(a, grid, hierarchy.level(l + 1))
                                              : Eigen::SparseMatrix<double>();
-      Eigen::SparseMatrix<double> boundaryBlock;  // A_bb^l, factorised once A^l is released
       if (l < coarsest() || l == 0) {
         // Weak rows pull in their neighbours on the texel grid only: there they come from
         // texels their chart barely covers; coarse Galerkin rows of boundary nodes are often
@@ -256,7 +255,7 @@ struct MultigridSolver<Scalar>::Impl {
         if (numericPhase) {
           detail::indexUnknowns(grid, lv.sys);
           if (l == 0) assignRowSums(grid, a);
-          detail::assignBoundary(grid, a, lv.sys, boundaryBlock);
+          detail::assignBoundary(grid, a, lv.sys);
           detail::assignLines<T>(grid, a, lv.sys, options.lineRatio, lv.lines, lv.lineCoeffs);
         }
         // The cycles never read the unknown index, nor does assignStencils: it goes before the
@@ -281,12 +280,9 @@ struct MultigridSolver<Scalar>::Impl {
       // level 0 from its data, a handed-over A^0 and then A^1, never both.
       const int64_t handedBytes = l == 0 && handedOver ? sparseBytes(*handedOver) : 0;
       if (l == 0 && handedOver) Eigen::SparseMatrix<double>().swap(*handedOver);  // A^0
-      // Factorised only now: CHOLMOD's copy of A_bb^0 and its factor's work (10-20 bytes per
-      // texel) never coexist with a handed-over A^0 (docs/memory.md).
-      if (boundaryBlock.rows() > 0) {
-        lv.sys.boundarySolver.factorize(boundaryBlock);
-        Eigen::SparseMatrix<double>().swap(boundaryBlock);
-      }
+      // Factorised only now, from the boundary rows: A_bb^0, CHOLMOD's copy and its factor's
+      // work (15-20 bytes per texel) never coexist with a handed-over A^0 (docs/memory.md).
+      if (numericPhase && (l < coarsest() || l == 0)) detail::factoriseBoundary(grid, lv.sys);
       if (fromLevelData) {
         Eigen::SparseMatrix<double> formed =
             detail::galerkinFromLevel(grid, lv.sys, std::span<const T>(lv.stencil.data(),

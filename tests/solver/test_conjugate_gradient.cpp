@@ -144,6 +144,13 @@ TEST(ConjugateGradient, ResidualBlowUpStopsAsDivergedWithTheBestIterate) {
   EXPECT_GT(report.residuals.back(), kCgDivergenceGrowth * report.residuals.front());
   EXPECT_EQ(x, Eigen::MatrixXd::Zero(2, 1)) << "the best iterate: the initial guess";
   EXPECT_NE(report.toString().find("(diverged)"), std::string::npos);
+  // From a nonzero guess the best iterate, recovered by taking the step back, is that guess to
+  // the rounding of a step of ~5e5.
+  const Eigen::Vector2d guess(0.25, -0.25);  // r = (0.75, 0.75 - 1e-6): the same blow-up
+  Eigen::MatrixXd y = guess;
+  const SolveReport fromGuess = conjugateGradient(a, b, y, {}, {20, 1e-10});
+  ASSERT_TRUE(fromGuess.diverged) << fromGuess.toString();
+  EXPECT_LT((y - guess).norm(), 1e-9) << y.transpose();
 }
 
 TEST(ConjugateGradient, FloatLevelZeroOperatorKeepsTheSmallRowSumsOfAScreenedSystem) {

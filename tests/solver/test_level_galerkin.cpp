@@ -58,10 +58,9 @@ detail::LevelSystem boundaryAssigned(const GridLevel& fine, const Eigen::SparseM
   detail::LevelSystem system;
   detail::classifyLevel(fine, a, MultigridOptions().weakRowReach, system);
   detail::indexUnknowns(fine, system);
-  Eigen::SparseMatrix<double> block;
-  detail::assignBoundary(fine, a, system, block);
+  detail::assignBoundary(fine, a, system);
   detail::releaseUnknownIndex(system);
-  if (block.rows() > 0) system.boundarySolver.factorize(block);
+  detail::factoriseBoundary(fine, system);
   return system;
 }
 

@@ -68,8 +68,9 @@ struct CgOperator {
 inline constexpr double kFloatIterateTolerance = 1e-5;
 
 /// Preconditioned CG on `a` as conjugateGradient below, with three n x k work blocks (the
-/// residual in Iterate, the direction and one shared for A p and M⁻¹ r in Scalar) and the best
-/// iterate kept in Scalar (returned, rounded to Scalar, if the residual diverges).
+/// residual in Iterate, the direction and one shared for A p and M⁻¹ r in Scalar) and, once the
+/// residual has risen, the best iterate kept in Scalar (returned, rounded to Scalar, if the
+/// residual diverges).
 template <typename Scalar, typename Iterate>
 SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
                               const typename CgOperator<Scalar, Iterate>::Vectors& b,
