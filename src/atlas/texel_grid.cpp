@@ -17,8 +17,13 @@
 namespace texgrad {
 namespace {
 
-/// Largest grid we agree to build (cells); beyond it UVs are almost surely not an atlas.
-constexpr double kMaxCells = 1u << 28;
+/// A grid of more cells than this, and than kMaxImageMultiple times the image's, spans UVs
+/// far outside [0, 1]^2: almost surely not an atlas.
+constexpr double kTilingCells = 1u << 28;
+/// Image cells a grid may span before it counts as tiling: UVs over about 2 x 2 texture widths.
+constexpr double kMaxImageMultiple = 4.0;
+/// Largest grid we build (cells, about a 32768² texture): cell indices are 32-bit.
+constexpr double kMaxCells = 1u << 30;
 
 double uvTriangleArea2(const std::array<Eigen::Vector2d, 3>& c) {
   const Eigen::Vector2d e1 = c[1] - c[0], e2 = c[2] - c[0];
@@ -38,10 +43,18 @@ void setExtent(const TexturedMesh& mesh, TexelGrid& g) {
     }
   if (!(lx <= hx)) return;  // no faces: empty grid
   const double cells = (std::ceil(hx) - std::floor(lx) + 2) * (std::ceil(hy) - std::floor(ly) + 2);
-  if (cells > kMaxCells) {
+  const double imageCells = (g.imageWidth + 1.0) * (g.imageHeight + 1.0);
+  if (cells > std::max(kTilingCells, kMaxImageMultiple * imageCells)) {
     std::ostringstream msg;
     msg << "UV coordinates span " << (hx - lx) / g.imageWidth << " x " << (hy - ly) / g.imageHeight
         << " texture widths; texgrad needs an atlas inside about [0,1]^2 (no tiling UVs)";
+    throw InvalidInputError(msg.str());
+  }
+  if (cells > kMaxCells) {
+    std::ostringstream msg;
+    msg << "a " << g.imageWidth << "x" << g.imageHeight << " texture is larger than texgrad "
+        << "supports (about 32768x32768: at most 2^30 texel cells); downscale it or split the "
+        << "atlas over several pages (UDIM tiles)";
     throw InvalidInputError(msg.str());
   }
   g.x0 = static_cast<int>(std::floor(lx));

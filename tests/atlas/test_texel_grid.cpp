@@ -4,11 +4,13 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
 
 #include "shared_meshes.h"
 #include "texgrad/atlas/atlas.h"
 #include "texgrad/atlas/atlas_report.h"
 #include "texgrad/atlas/texel_grid.h"
+#include "texgrad/core/error.h"
 #include "texgrad/io/mesh_reader.h"
 #include "texgrad/io/procedural.h"
 
@@ -116,6 +118,32 @@ TEST(TexelGrid, UvsOutsideTheImageExtendTheGrid) {
   const AtlasReport report = analyzeAtlas(m, buildAtlas(m), &g);
   EXPECT_GT(report.texels->texelsOutsideImage, 0);
   EXPECT_EQ(report.texels->chartsTouchingBorder, std::vector<int32_t>{0});
+}
+
+TEST(TexelGrid, TilingUvsAndOversizedTexturesAreRefusedWithTheirOwnReason) {
+  // Refused before any per-cell array is allocated, so these cost nothing. UVs over 3 x 3
+  // texture widths of an 8192² texture: more than 2^28 cells and 4 times the image's, tiling.
+  TexturedMesh tiled;
+  addRectangle(tiled, -1.0, -1.0, 2.0, 2.0);
+  try {
+    buildTexelGrid(tiled, buildAtlas(tiled), 8192, 8192);
+    ADD_FAILURE() << "tiling UVs were accepted";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("span 3 x 3 texture widths"), std::string::npos)
+        << e.what();
+  }
+  // An atlas inside [0, 1]^2 on a texture beyond 2^30 cells: too large, not tiling (a 16384²
+  // texture, 2^28 cells, was refused as tiling before; bench/memory.py runs it).
+  TexturedMesh unit;
+  addRectangle(unit, 0.0, 0.0, 1.0, 1.0);
+  try {
+    buildTexelGrid(unit, buildAtlas(unit), 40000, 40000);
+    ADD_FAILURE() << "a 40000x40000 grid was accepted";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("40000x40000 texture is larger than texgrad supports"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(TexelGrid, StackedChartsAreReportedAsOverlap) {
