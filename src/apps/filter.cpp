@@ -311,7 +311,7 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
       x0.channels(), progress, [&](int c, const ProgressCallback& channelProgress) {
         const auto k = static_cast<size_t>(c);
         Eigen::MatrixXf channel = x0.channel(c);  // the initial guess
-        const Eigen::MatrixXf b = Eigen::Map<const Eigen::MatrixXf>(rhs[k].data(), rhs[k].size(), 1);
+        const Eigen::MatrixXf b = rhs[k];
         rhs[k] = Eigen::VectorXf();
         const SolveReport report = solver->solve(b, channel, channelProgress);
         solved[k] = std::move(channel);
@@ -324,7 +324,7 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
   Eigen::MatrixXd x(domain.unknowns(), x0.channels());
   for (size_t k = 0; k < solved.size(); ++k) {
     x.col(static_cast<Eigen::Index>(k)) = solved[k].cast<double>();
-    solved[k] = Eigen::VectorXf();
+    solved[k] = Eigen::MatrixXf();
   }
   boundBarelyCovered(barely, barelyX0, x);
   if (levels) {

@@ -596,12 +596,15 @@ SolveReport SystemSolver::solve(const Eigen::MatrixXf& b, Eigen::MatrixXf& x,
                                 const ProgressCallback& progress) {
   if (!floatIterates()) {
     const Eigen::MatrixXd bd = b.cast<double>();
-    Eigen::MatrixXd xd = x.rows() == b.rows() && x.cols() == b.cols()
-                             ? Eigen::MatrixXd(x.cast<double>())
-                             : Eigen::MatrixXd::Zero(b.rows(), b.cols());
-    const SolveReport report = solve(bd, xd, progress);
-    x = xd.cast<float>();
-    return report;
+    Eigen::MatrixXd xd = x.cast<double>();
+    try {
+      const SolveReport report = solve(bd, xd, progress);
+      x = xd.cast<float>();
+      return report;
+    } catch (...) {  // a cancel: x holds the iterate, as the double solve's does
+      x = xd.cast<float>();
+      throw;
+    }
   }
   if (x.rows() != b.rows() || x.cols() != b.cols()) x = Eigen::MatrixXf::Zero(b.rows(), b.cols());
   CgOptions options;
@@ -612,9 +615,12 @@ SolveReport SystemSolver::solve(const Eigen::MatrixXf& b, Eigen::MatrixXf& x,
 }
 
 bool SystemSolver::floatIterates() const {
+  // Then CG runs on the level-0 operator too (cgUsesLevelZeroOperator), whose float products
+  // reach kFloatOperatorTolerance.
+  static_assert(kFloatIterateTolerance >= SolverSettings::kFloatOperatorTolerance);
   const SolverSettings& s = impl_->settings;
   return s.kind == SolverKind::MultigridCg && impl_->multigridFloat &&
-         s.cgUsesLevelZeroOperator() && s.effectiveTolerance() >= kFloatIterateTolerance;
+         s.effectiveTolerance() >= kFloatIterateTolerance;
 }
 
 SolveReport SystemSolver::step(const Eigen::MatrixXd& b, Eigen::MatrixXd& x,

@@ -22,8 +22,9 @@ namespace {
 constexpr double kTilingCells = 1u << 28;
 /// Image cells a grid may span before it counts as tiling: UVs over about 2 x 2 texture widths.
 constexpr double kMaxImageMultiple = 4.0;
-/// Largest grid we build (cells, about a 32768² texture): cell indices are 32-bit.
-constexpr double kMaxCells = 1u << 30;
+/// Largest grid we build (cells): a 32768² texture's, its texels and a ring of cells around them
+/// (cell indices are 32-bit).
+constexpr double kMaxCells = 32771.0 * 32771.0;
 
 double uvTriangleArea2(const std::array<Eigen::Vector2d, 3>& c) {
   const Eigen::Vector2d e1 = c[1] - c[0], e2 = c[2] - c[0];
@@ -53,8 +54,8 @@ void setExtent(const TexturedMesh& mesh, TexelGrid& g) {
   if (cells > kMaxCells) {
     std::ostringstream msg;
     msg << "a " << g.imageWidth << "x" << g.imageHeight << " texture is larger than texgrad "
-        << "supports (about 32768x32768: at most 2^30 texel cells); downscale it or split the "
-        << "atlas over several pages (UDIM tiles)";
+        << "supports (32768x32768); downscale it or split the atlas over several pages (UDIM "
+        << "tiles)";
     throw InvalidInputError(msg.str());
   }
   g.x0 = static_cast<int>(std::floor(lx));

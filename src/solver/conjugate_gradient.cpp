@@ -146,7 +146,7 @@ SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
   requireFinite(r, "the residual of the initial guess (A holds non-finite values)");
   // The iterate with the smallest residual, returned if the residual then diverges. While the
   // residuals fall that is the current iterate, so it is copied (one n x k block) only once
-  // they rise: then it is the iterate before the step just taken, x minus that step.
+  // they rise: the iterate before the step that made them rise, which x still is then.
   Block best;
   double bestResidual = report.residuals.back();
   while (report.iterations < options.maxIterations && report.residuals.back() > options.tolerance) {
@@ -162,13 +162,12 @@ SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
       alpha(c) = pap(c) > 0.0 ? rz(c) / pap(c) : 0.0;
     }
     const Eigen::Matrix<Iterate, 1, Eigen::Dynamic> step = alpha.template cast<Iterate>();
-    x.noalias() += p.template cast<Iterate>() * step.asDiagonal();
     r.noalias() -= w.template cast<Iterate>() * step.asDiagonal();
+    const double residual = r.norm() * scale;
+    if (residual >= bestResidual && best.size() == 0) best = x.template cast<Scalar>();
+    x.noalias() += p.template cast<Iterate>() * step.asDiagonal();
     report.rmsChange.push_back((p.template cast<double>() * alpha.asDiagonal()).norm() /
                                std::sqrt(std::max<double>(1.0, double(p.size()))));
-    const double residual = r.norm() * scale;
-    if (residual >= bestResidual && best.size() == 0)  // p is still the step's direction
-      best = (x - p.template cast<Iterate>() * step.asDiagonal()).template cast<Scalar>();
     report.times.other += secondsSince(start);
     precondition();
     start = Clock::now();

@@ -247,12 +247,7 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
       f(r, static_cast<double>(rowSums[static_cast<size_t>(s)]) - off);
       return;
     }
-    // Boundary indices grow with the unknown index (classifyLevel): find r's by bisection.
-    const auto& slots = system.boundarySlots;
-    const size_t j = static_cast<size_t>(
-        std::lower_bound(slots.begin(), slots.end(), r,
-                         [&](int32_t slot, int v) { return unknownOf(slot) < v; }) -
-        slots.begin());
+    const auto j = static_cast<size_t>(boundaryIndexOf(fine, system, r));
     const SlotCsr& rows = system.boundaryRows;
     const int64_t offEnd = system.offBlockEnd[j];
     double rounding = 0.0;  // of the couplings to interior texels, which their stencils hold in T

@@ -322,6 +322,16 @@ void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& sys
   assignInteriorNextToBoundary(level, a, system);
 }
 
+int boundaryIndexOf(const GridLevel& level, const LevelSystem& system, int u) {
+  const auto& slots = system.boundarySlots;
+  return static_cast<int>(std::lower_bound(slots.begin(), slots.end(), u,
+                                           [&](int32_t slot, int v) {
+                                             return level.unknownOfSlot[static_cast<size_t>(slot)] <
+                                                    v;
+                                           }) -
+                          slots.begin());
+}
+
 void factoriseBoundary(const GridLevel& level, LevelSystem& system) {
   const int nb = system.boundaryCount();
   if (nb == 0) return;
@@ -336,23 +346,16 @@ void factoriseBoundary(const GridLevel& level, LevelSystem& system) {
   bb.resizeNonZeros(static_cast<Eigen::Index>(total));
   bb.outerIndexPtr()[0] = 0;
   for (int j = 0; j < nb; ++j)
-    bb.outerIndexPtr()[j + 1] = bb.outerIndexPtr()[j] + static_cast<int>(blockEnd(j) - blockBegin(j));
+    bb.outerIndexPtr()[j + 1] =
+        bb.outerIndexPtr()[j] + static_cast<int>(blockEnd(j) - blockBegin(j));
   // Row j's A_bb entries are its boundary columns in the order of A's row, by increasing
-  // unknown, as the compact indices are (classifyLevel): each is found by a binary search over
-  // the boundary unknowns, and every column of the block comes out sorted, as boundaryBlock's.
+  // unknown, as the compact indices are (classifyLevel): every column of the block comes out
+  // sorted, as boundaryBlock's.
   tbb::parallel_for(0, nb, [&](int j) {
     int out = bb.outerIndexPtr()[j];
     for (int64_t e = blockBegin(j); e != blockEnd(j); ++e) {
       const int u = level.unknownOfSlot[static_cast<size_t>(rows.col[static_cast<size_t>(e)])];
-      int lo = 0, hi = nb;
-      while (lo < hi) {
-        const int mid = lo + (hi - lo) / 2;
-        if (unknownOfBoundary(level, system, mid) < u)
-          lo = mid + 1;
-        else
-          hi = mid;
-      }
-      bb.innerIndexPtr()[out] = lo;
+      bb.innerIndexPtr()[out] = boundaryIndexOf(level, system, u);
       bb.valuePtr()[out++] = rows.val[static_cast<size_t>(e)];
     }
   });

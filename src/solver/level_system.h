@@ -115,6 +115,10 @@ void releaseUnknownIndex(LevelSystem& system);
 /// Numeric phase for the boundary: fills boundaryRows / offBlockEnd. Needs indexUnknowns.
 void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system);
 
+/// Compact boundary index of boundary unknown u: a bisection over the boundary unknowns, which
+/// grow with the index (classifyLevel), so no per-unknown index need be held.
+int boundaryIndexOf(const GridLevel& level, const LevelSystem& system, int u);
+
 /// Factorises A_bb^l (system.boundarySolver), read from the assigned boundary rows rather than
 /// from A: a caller can release A first, so that a handed-over A^0 never coexists with CHOLMOD's
 /// copy of the block and the factorisation's work.

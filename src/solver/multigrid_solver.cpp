@@ -211,8 +211,9 @@ struct MultigridSolver<Scalar>::Impl {
   /// once both exist. Level 0 goes the other way in the numeric phase: its data are filled in
   /// from A^0, then A^0 is freed if handed over (`handedOver`: the matrix a0 views, owned by the
   /// walk), then its boundary block is factorised, then A^1 is formed from level 0's data
-  /// (galerkinFromLevel), so A^0 coexists with neither A^1 nor a factorisation (docs/memory.md). The symbolic phase alone has no level-0 data and forms A^1 from
-  /// A^0's pattern: the same pattern (galerkinFromLevel).
+  /// (galerkinFromLevel), so A^0 coexists with neither A^1 nor a factorisation (docs/memory.md).
+  /// The symbolic phase alone has no level-0 data and forms A^1 from A^0's pattern: the same
+  /// pattern (galerkinFromLevel).
   void walkLevels(const SparseSum& a0, bool symbolicPhase, bool numericPhase,
                   Eigen::SparseMatrix<double>* handedOver = nullptr) {
     if (symbolicPhase) {
@@ -245,7 +246,10 @@ struct MultigridSolver<Scalar>::Impl {
       Eigen::SparseMatrix<double> next = l < coarsest() && !fromLevelData
                                              ? galerkinProduct(a, grid, hierarchy.level(l + 1))
                                              : Eigen::SparseMatrix<double>();
-      if (l < coarsest() || l == 0) {
+      // Levels split into interior stencils and a boundary block: all but a coarsest level
+      // above level 0, which is solved directly.
+      const bool split = l < coarsest() || l == 0;
+      if (split) {
         // Weak rows pull in their neighbours on the texel grid only: there they come from
         // texels their chart barely covers; coarse Galerkin rows of boundary nodes are often
         // weak without such a cause, and locking their neighbours slowed small atlases (cube
@@ -282,7 +286,7 @@ struct MultigridSolver<Scalar>::Impl {
       if (l == 0 && handedOver) Eigen::SparseMatrix<double>().swap(*handedOver);  // A^0
       // Factorised only now, from the boundary rows: A_bb^0, CHOLMOD's copy and its factor's
       // work (15-20 bytes per texel) never coexist with a handed-over A^0 (docs/memory.md).
-      if (numericPhase && (l < coarsest() || l == 0)) detail::factoriseBoundary(grid, lv.sys);
+      if (numericPhase && split) detail::factoriseBoundary(grid, lv.sys);
       if (fromLevelData) {
         Eigen::SparseMatrix<double> formed =
             detail::galerkinFromLevel(grid, lv.sys, std::span<const T>(lv.stencil.data(),

@@ -132,7 +132,7 @@ TEST(TexelGrid, TilingUvsAndOversizedTexturesAreRefusedWithTheirOwnReason) {
     EXPECT_NE(std::string(e.what()).find("span 3 x 3 texture widths"), std::string::npos)
         << e.what();
   }
-  // An atlas inside [0, 1]^2 on a texture beyond 2^30 cells: too large, not tiling (a 16384²
+  // An atlas inside [0, 1]^2 on a texture above 32768²: too large, not tiling (a 16384²
   // texture, 2^28 cells, was refused as tiling before; bench/memory.py runs it).
   TexturedMesh unit;
   addRectangle(unit, 0.0, 0.0, 1.0, 1.0);

@@ -148,6 +148,33 @@ TEST(LevelGalerkin, CoarseOperatorFromLevelDataEqualsTheProductOfA0) {
     }
 }
 
+TEST(LevelGalerkin, BoundaryFactorisationFromTheBoundaryRowsIsThatOfA0sBoundaryBlock) {
+  // factoriseBoundary reads A_bb from the boundary rows (A^0 may be gone by then): it must
+  // factorise A^0 restricted to the boundary unknowns, seams' far-away entries included.
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  const GridHierarchy h = GridHierarchy::build(p.grid, 4, 16);
+  const GridLevel& fine = h.level(0);
+  const Eigen::SparseMatrix<double> a = p.system(1e-2);
+  const detail::LevelSystem system = boundaryAssigned(fine, a);
+  const int nb = system.boundaryCount();
+  ASSERT_GT(nb, 0);
+  std::vector<int> unknownOfBoundary(static_cast<size_t>(nb));
+  for (int j = 0; j < nb; ++j) {
+    const int32_t slot = system.boundarySlots[static_cast<size_t>(j)];
+    const int u = fine.unknownOfSlot[static_cast<size_t>(slot)];
+    unknownOfBoundary[static_cast<size_t>(j)] = u;
+    EXPECT_EQ(detail::boundaryIndexOf(fine, system, u), j);
+  }
+  Eigen::MatrixXd dense(nb, nb);
+  for (int i = 0; i < nb; ++i)
+    for (int j = 0; j < nb; ++j)
+      dense(i, j) = a.coeff(unknownOfBoundary[static_cast<size_t>(i)],
+                            unknownOfBoundary[static_cast<size_t>(j)]);
+  const Eigen::MatrixXd y = Eigen::MatrixXd::Random(nb, 2);
+  const Eigen::MatrixXd x = system.boundarySolver.solve(y);
+  EXPECT_LT((dense * x - y).norm() / y.norm(), 1e-12);
+}
+
 TEST(LevelGalerkin, SolverKeepsTheCoarsePatternOfInitForInteriorRowsOfAnyPattern) {
   // init forms A^1 from A^0's pattern, update from level 0's stencils: the pattern of A^1 must be
   // the same (update throws otherwise), also when interior rows lack lattice neighbours or store

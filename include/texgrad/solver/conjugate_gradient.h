@@ -119,8 +119,9 @@ CgOperator<Scalar, Iterate> multigridOperator(const MultigridSolver<Scalar>& sol
   op.product = [&solver](const typename Operator::Block& p, typename Operator::Block& ap) {
     solver.applyOperator(p, ap);
   };
-  op.preconditioner = [&solver](const typename Operator::Vectors& r,
-                                typename Operator::Block& z) { solver.preconditionInto(r, z); };
+  op.preconditioner = [&solver](const typename Operator::Vectors& r, typename Operator::Block& z) {
+    solver.preconditionInto(r, z);
+  };
   return op;
 }
 
