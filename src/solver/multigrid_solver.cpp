@@ -249,6 +249,10 @@ struct MultigridSolver<Scalar>::Impl {
       // Levels split into interior stencils and a boundary block: all but a coarsest level
       // above level 0, which is solved directly.
       const bool split = l < coarsest() || l == 0;
+      // A handed-over A^0's pages are released (assignStencils) before level 0's boundary block
+      // is factorised, so that CHOLMOD's copy and its factor's work (15-20 bytes per texel)
+      // never sit beside it; any other block is factorised before the level's stencils exist.
+      const bool factoriseLast = l == 0 && handedOver;
       if (split) {
         // Weak rows pull in their neighbours on the texel grid only: there they come from
         // texels their chart barely covers; coarse Galerkin rows of boundary nodes are often
@@ -260,6 +264,7 @@ struct MultigridSolver<Scalar>::Impl {
           detail::indexUnknowns(grid, lv.sys);
           if (l == 0) assignRowSums(grid, a);
           detail::assignBoundary(grid, a, lv.sys);
+          if (!factoriseLast) detail::factoriseBoundary(grid, lv.sys);
           detail::assignLines<T>(grid, a, lv.sys, options.lineRatio, lv.lines, lv.lineCoeffs);
         }
         // The cycles never read the unknown index, nor does assignStencils: it goes before the
@@ -283,10 +288,11 @@ struct MultigridSolver<Scalar>::Impl {
       // The matrices held with level l's data: A^l (A^0 only if handed over) and A^{l+1}; at
       // level 0 from its data, a handed-over A^0 and then A^1, never both.
       const int64_t handedBytes = l == 0 && handedOver ? sparseBytes(*handedOver) : 0;
+      // Before A^0 is freed, though its pages are gone: CHOLMOD's blocks then do not settle in
+      // the hole it leaves, which the next matrix formed (reaction-diffusion's second species)
+      // fills whole.
+      if (numericPhase && split && factoriseLast) detail::factoriseBoundary(grid, lv.sys);
       if (l == 0 && handedOver) Eigen::SparseMatrix<double>().swap(*handedOver);  // A^0
-      // Factorised only now, from the boundary rows: A_bb^0, CHOLMOD's copy and its factor's
-      // work (15-20 bytes per texel) never coexist with a handed-over A^0 (docs/memory.md).
-      if (numericPhase && split) detail::factoriseBoundary(grid, lv.sys);
       if (fromLevelData) {
         Eigen::SparseMatrix<double> formed =
             detail::galerkinFromLevel(grid, lv.sys, std::span<const T>(lv.stencil.data(),
