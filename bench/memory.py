@@ -10,8 +10,10 @@ A size above --max-gb by a dry estimate (texels from the coverage of a smaller r
 mesh, or of the UV area, times --estimate-bytes per texel) is skipped, not run: the kernel
 would kill it. Run from the source tree, e.g.
     bench/memory.py --texgrad build/rel/texgrad --sizes 2048,4096 --lpshead-sizes 4096
-The defaults are issue 28's rows on a 24 GB machine (--max-gb 21): spot at 2048² to 16384²,
-lpshead at 8192² (after 4096², whose measured rate feeds the estimate).
+The defaults are issue 28's rows: spot at 2048² to 16384² (each size's estimate from the
+measured rate of the one before), lpshead at 8192² (after 4096²), and --max-gb 0.95 of the
+machine's memory (MemTotal; 21 where /proc/meminfo is missing): on a 24 GB machine spot at
+16384² runs, at about 23.2 GB.
 """
 import argparse
 import json
@@ -33,6 +35,18 @@ MESHES = {
 STAGES = ("read", "operators", "solve", "write", "total")
 BYTES_PER_GB = 1e9
 BYTES_PER_KIB = 1024
+
+
+def default_max_gb():
+    """0.95 of the machine's memory in GB (MemTotal), or 21 without /proc/meminfo."""
+    try:
+        with open("/proc/meminfo") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemTotal:"):
+                    return 0.95 * int(line.split()[1]) * BYTES_PER_KIB / BYTES_PER_GB
+    except OSError:
+        pass
+    return 21.0
 
 
 def parse_sizes(text):
@@ -85,8 +99,9 @@ def main():
     parser.add_argument("--sizes", default="2048,4096,8192,16384",
                         help="spot sizes, e.g. 2048,4096,8192,16384")
     parser.add_argument("--lpshead-sizes", default="4096,8192", help="lpshead sizes ('' for none)")
-    parser.add_argument("--max-gb", type=float, default=21.0,
-                        help="skip a size whose dry estimate exceeds this (GB)")
+    parser.add_argument("--max-gb", type=float, default=default_max_gb(),
+                        help="skip a size whose dry estimate exceeds this (GB; default: 0.95 "
+                             "of MemTotal)")
     parser.add_argument("--estimate-bytes", type=float, default=400.0,
                         help="bytes per active texel for the dry estimate before any run")
     parser.add_argument("--dry-run", action="store_true", help="print the estimates only")
