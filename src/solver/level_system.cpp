@@ -332,9 +332,13 @@ int boundaryIndexOf(const GridLevel& level, const LevelSystem& system, int u) {
                           slots.begin());
 }
 
-void factoriseBoundary(const GridLevel& level, LevelSystem& system) {
+void factoriseBoundary(const GridLevel& level, LevelSystem& system, const SparseSum* a) {
   const int nb = system.boundaryCount();
   if (nb == 0) return;
+  if (a) {  // the unknown index is held: no bisection per entry
+    system.boundarySolver.factorize(boundaryBlock(level, *a, system));
+    return;
+  }
   const SlotCsr& rows = system.boundaryRows;
   const auto blockBegin = [&](int j) { return system.offBlockEnd[static_cast<size_t>(j)]; };
   const auto blockEnd = [&](int j) { return rows.ptr[static_cast<size_t>(j) + 1]; };

@@ -119,10 +119,11 @@ void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& sys
 /// grow with the index (classifyLevel), so no per-unknown index need be held.
 int boundaryIndexOf(const GridLevel& level, const LevelSystem& system, int u);
 
-/// Factorises A_bb^l (system.boundarySolver), read from the assigned boundary rows rather than
-/// from A: a caller can release A first, so that a handed-over A^0 never coexists with CHOLMOD's
-/// copy of the block and the factorisation's work.
-void factoriseBoundary(const GridLevel& level, LevelSystem& system);
+/// Factorises A_bb^l (system.boundarySolver): read from `a` where given (needs indexUnknowns),
+/// else from the assigned boundary rows, so that a caller can release A first and a handed-over
+/// A^0 never coexists with CHOLMOD's copy of the block and the factorisation's work.
+void factoriseBoundary(const GridLevel& level, LevelSystem& system,
+                       const SparseSum* a = nullptr);
 
 /// Numeric phase for the interior: the stencil planes of every run (see SlotRow) from the rows of
 /// `a` at interior unknowns; the other slots of a run get zero coefficients and mask 0. The runs

@@ -209,9 +209,10 @@ struct MultigridSolver<Scalar>::Impl {
   /// chain of Galerkin products instead of two. For l > 0, A^{l+1} is formed before level l's
   /// data are filled in, so the product's temporaries never coexist with them, and A^l is freed
   /// once both exist. Level 0 goes the other way in the numeric phase: its data are filled in
-  /// from A^0, then A^0 is freed if handed over (`handedOver`: the matrix a0 views, owned by the
-  /// walk), then its boundary block is factorised, then A^1 is formed from level 0's data
-  /// (galerkinFromLevel), so A^0 coexists with neither A^1 nor a factorisation (docs/memory.md).
+  /// from A^0; if A^0 was handed over (`handedOver`: the matrix a0 views, owned by the walk),
+  /// its pages are dropped meanwhile, then its boundary block is factorised from the level's
+  /// boundary rows and A^0 freed; then A^1 is formed from level 0's data (galerkinFromLevel), so
+  /// A^0 coexists with neither A^1 nor a factorisation (docs/memory.md).
   /// The symbolic phase alone has no level-0 data and forms A^1 from A^0's pattern: the same
   /// pattern (galerkinFromLevel).
   void walkLevels(const SparseSum& a0, bool symbolicPhase, bool numericPhase,
@@ -264,7 +265,7 @@ struct MultigridSolver<Scalar>::Impl {
           detail::indexUnknowns(grid, lv.sys);
           if (l == 0) assignRowSums(grid, a);
           detail::assignBoundary(grid, a, lv.sys);
-          if (!factoriseLast) detail::factoriseBoundary(grid, lv.sys);
+          if (!factoriseLast) detail::factoriseBoundary(grid, lv.sys, &a);
           detail::assignLines<T>(grid, a, lv.sys, options.lineRatio, lv.lines, lv.lineCoeffs);
         }
         // The cycles never read the unknown index, nor does assignStencils: it goes before the
