@@ -90,16 +90,16 @@ Eigen::MatrixXd roundedRightHandSide(const Eigen::MatrixXd& rhs) {
 /// order, as InteractiveFilter's from its stored M x0 and S x0, so the same bits; with beta 0
 /// and no map S x0 is not formed (InteractiveFilter adds 0 S x0, which changes no value but the
 /// sign of a zero).
-std::vector<Eigen::VectorXf> screenedRightHandSide(const TexelOperators& ops, const TexelValues& x0,
+std::vector<Eigen::MatrixXf> screenedRightHandSide(const TexelOperators& ops, const TexelValues& x0,
                                                    const FilterOptions& options) {
-  std::vector<Eigen::VectorXf> rhs(static_cast<size_t>(x0.channels()));
+  std::vector<Eigen::MatrixXf> rhs(static_cast<size_t>(x0.channels()));
   const bool mapped = !options.betaPerCell.empty();
   const Eigen::SparseMatrix<double> modulated =
       mapped ? ops.modulatedStiffness(options.betaPerCell) : Eigen::SparseMatrix<double>();
   Eigen::MatrixXd b, product;
   for (int c = 0; c < x0.channels(); ++c) {
     const Eigen::VectorXf x0c = x0.channel(c);
-    Eigen::VectorXf& out = rhs[static_cast<size_t>(c)];
+    Eigen::MatrixXf& out = rhs[static_cast<size_t>(c)];
     if (!mapped && options.beta == 0.0) {  // straight into floats: no n x 1 double
       symmetricProduct(ops.mass(), x0c, options.alpha, out);
       continue;
@@ -122,7 +122,7 @@ std::vector<Eigen::VectorXf> screenedRightHandSide(const TexelOperators& ops, co
 /// channel, and the bound on barely covered texels, which reads M.
 struct ScreenedProblem {
   Eigen::SparseMatrix<double> system;
-  std::vector<Eigen::VectorXf> rhs;
+  std::vector<Eigen::MatrixXf> rhs;  ///< n x 1 each
   BarelyCoveredNeighbours barely;
 };
 
@@ -136,7 +136,7 @@ void screenColumnByColumn(std::unique_ptr<TexelOperators> operators, std::vector
                           const ProgressCallback& progress, ScreenedProblem& out) {
   const int channels = x0.channels();
   const auto unknowns = static_cast<Eigen::Index>(operators->basis().grid().unknownCount());
-  out.rhs.assign(static_cast<size_t>(channels), Eigen::VectorXf(unknowns));
+  out.rhs.assign(static_cast<size_t>(channels), Eigen::MatrixXf(unknowns, 1));
   std::vector<std::vector<int32_t>> neighbours(barely.size());
   const ColumnVisitor visit = [&](const OperatorColumn& column) {
     const int u = column.column;
@@ -147,7 +147,7 @@ void screenColumnByColumn(std::unique_ptr<TexelOperators> operators, std::vector
         mass += column.mass[k] * x;
         if (options.beta != 0.0) stiffness += column.stiffness[k] * x;
       }
-      out.rhs[static_cast<size_t>(c)](u) =
+      out.rhs[static_cast<size_t>(c)](u, 0) =
           options.beta == 0.0 ? static_cast<float>(options.alpha * mass)
                               : static_cast<float>(options.alpha * mass + options.beta * stiffness);
     }
@@ -296,7 +296,7 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
   if (mapsKept) mapsOwner->releaseImageMaps(TexelDomain::KeptMaps::ClassAndChart);
   const BarelyCoveredNeighbours& barely = problem.barely;
   const Eigen::MatrixXd barelyX0 = x0.rows(barely.unknowns);
-  std::vector<Eigen::VectorXf>& rhs = problem.rhs;
+  std::vector<Eigen::MatrixXf>& rhs = problem.rhs;
   // Built once S is freed (the hierarchy is larger than the class and chart maps it reads, its
   // only read of the grid), then those maps go too.
   std::optional<SystemSolver> solver(std::in_place, domain.grid(), options.solver);
@@ -304,16 +304,14 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
   solver->initAndUpdate(std::move(problem.system), progress);
   FilterResult result;
   // Each channel is solved on float b and x (SystemSolver::floatIterates: CG keeps its iterate
-  // and residual in float too, by default), and its solution kept as floats, the image's own
-  // type, until all are solved.
+  // and residual in float too, by default, the residual in b's storage), and its solution kept
+  // as floats, the image's own type, until all are solved.
   std::vector<Eigen::MatrixXf> solved(rhs.size());
   result.report = solveEachChannel(
       x0.channels(), progress, [&](int c, const ProgressCallback& channelProgress) {
         const auto k = static_cast<size_t>(c);
         Eigen::MatrixXf channel = x0.channel(c);  // the initial guess
-        const Eigen::MatrixXf b = rhs[k];
-        rhs[k] = Eigen::VectorXf();
-        const SolveReport report = solver->solve(b, channel, channelProgress);
+        const SolveReport report = solver->solve(std::move(rhs[k]), channel, channelProgress);
         solved[k] = std::move(channel);
         return report;
       });

@@ -592,7 +592,7 @@ SolveReport SystemSolver::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
   return impl_->run(b, x, count, progress);
 }
 
-SolveReport SystemSolver::solve(const Eigen::MatrixXf& b, Eigen::MatrixXf& x,
+SolveReport SystemSolver::solve(Eigen::MatrixXf b, Eigen::MatrixXf& x,
                                 const ProgressCallback& progress) {
   if (!floatIterates()) {
     const Eigen::MatrixXd bd = b.cast<double>();
@@ -610,8 +610,8 @@ SolveReport SystemSolver::solve(const Eigen::MatrixXf& b, Eigen::MatrixXf& x,
   CgOptions options;
   options.maxIterations = impl_->settings.maxIterations;
   options.tolerance = impl_->settings.effectiveTolerance();
-  return conjugateGradient(multigridOperator<float, float>(*impl_->multigridFloat), b, x, options,
-                           progress);
+  return conjugateGradient(multigridOperator<float, float>(*impl_->multigridFloat), std::move(b),
+                           x, options, progress);
 }
 
 bool SystemSolver::floatIterates() const {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 #include <type_traits>
+#include <utility>
 
 #include "texgrad/core/error.h"
 
@@ -96,37 +97,39 @@ void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
 }
 
 void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
-                      const Eigen::VectorXf& x, double scale, Eigen::VectorXf& y) {
+                      const Eigen::VectorXf& x, double scale, Eigen::MatrixXf& y) {
   productInto(a, x, y, [scale](double sum) { return static_cast<float>(scale * sum); });
 }
 
+namespace {
+
+/// conjugateGradient with `r` holding B on entry: the residual is formed in its storage.
 template <typename Scalar, typename Iterate>
-SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
-                              const typename CgOperator<Scalar, Iterate>::Vectors& b,
-                              typename CgOperator<Scalar, Iterate>::Vectors& x,
-                              const CgOptions& options, const ProgressCallback& progress) {
+SolveReport conjugateGradientFrom(const CgOperator<Scalar, Iterate>& a,
+                                  typename CgOperator<Scalar, Iterate>::Vectors r,
+                                  typename CgOperator<Scalar, Iterate>::Vectors& x,
+                                  const CgOptions& options, const ProgressCallback& progress) {
   using Block = typename CgOperator<Scalar, Iterate>::Block;
   options.validate();
-  if (b.rows() != a.rows || x.rows() != b.rows() || x.cols() != b.cols())
+  if (r.rows() != a.rows || x.rows() != r.rows() || x.cols() != r.cols())
     throw InvalidInputError("conjugateGradient: A is " + std::to_string(a.rows) + " x " +
-                            std::to_string(a.rows) + ", B has " + std::to_string(b.rows()) +
+                            std::to_string(a.rows) + ", B has " + std::to_string(r.rows()) +
                             " rows, X is " + std::to_string(x.rows()) + " x " +
                             std::to_string(x.cols()));
-  requireFinite(b, "the right-hand side");
+  requireFinite(r, "the right-hand side");
   requireFinite(x, "the initial guess");
   SolveReport report;
-  const double bNorm = b.norm();
+  const double bNorm = r.norm();
   const double scale = bNorm > 0.0 ? 1.0 / bNorm : 1.0;
   // w holds A p until x and r have taken their step, then M⁻¹ r until p has taken it: one block
   // for both (the classic four work vectors in three).
-  typename CgOperator<Scalar, Iterate>::Vectors r;
   Block p, w;
   auto start = Clock::now();
   if constexpr (std::is_same_v<Scalar, Iterate>) {
     a.product(x, w);
-    r = b - w;
+    r -= w;
   } else {
-    residualOfDoubleIterate(a.product, b, x, r, p, w);  // p and w are free until then
+    residualOfDoubleIterate(a.product, r, x, r, p, w);  // p and w are free until then
   }
   report.times.matvec += secondsSince(start);
   auto precondition = [&] {
@@ -140,7 +143,7 @@ SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
   precondition();
   p = w;
   Eigen::RowVectorXd rz = columnDots(r, w);
-  for (Eigen::Index c = 0; c < b.cols(); ++c)
+  for (Eigen::Index c = 0; c < x.cols(); ++c)
     requirePositive(rz(c), !r.col(c).isZero(0.0), "r^T z", "the preconditioner", c, -1);
   report.residuals.push_back(r.norm() * scale);
   requireFinite(r, "the residual of the initial guess (A holds non-finite values)");
@@ -156,8 +159,8 @@ SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
     report.times.matvec += secondsSince(start);
     start = Clock::now();
     const Eigen::RowVectorXd pap = columnDots(p, w);
-    Eigen::RowVectorXd alpha(b.cols());
-    for (Eigen::Index c = 0; c < b.cols(); ++c) {
+    Eigen::RowVectorXd alpha(x.cols());
+    for (Eigen::Index c = 0; c < x.cols(); ++c) {
       requirePositive(pap(c), !p.col(c).isZero(0.0), "p^T A p", "the matrix", c, report.iterations);
       alpha(c) = pap(c) > 0.0 ? rz(c) / pap(c) : 0.0;
     }
@@ -172,7 +175,7 @@ SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
     precondition();
     start = Clock::now();
     const Eigen::RowVectorXd rzNew = columnDots(r, w);
-    for (Eigen::Index c = 0; c < b.cols(); ++c) {
+    for (Eigen::Index c = 0; c < x.cols(); ++c) {
       requirePositive(rzNew(c), !r.col(c).isZero(0.0), "r^T z", "the preconditioner", c,
                       report.iterations);
       const double beta = rz(c) > 0.0 ? rzNew(c) / rz(c) : 0.0;
@@ -196,6 +199,25 @@ SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
   return report;
 }
 
+}  // namespace
+
+template <typename Scalar, typename Iterate>
+SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
+                              const typename CgOperator<Scalar, Iterate>::Vectors& b,
+                              typename CgOperator<Scalar, Iterate>::Vectors& x,
+                              const CgOptions& options, const ProgressCallback& progress) {
+  return conjugateGradientFrom(a, typename CgOperator<Scalar, Iterate>::Vectors(b), x, options,
+                               progress);
+}
+
+template <typename Scalar, typename Iterate>
+SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
+                              typename CgOperator<Scalar, Iterate>::Vectors&& b,
+                              typename CgOperator<Scalar, Iterate>::Vectors& x,
+                              const CgOptions& options, const ProgressCallback& progress) {
+  return conjugateGradientFrom(a, std::move(b), x, options, progress);
+}
+
 template SolveReport conjugateGradient<float, double>(const CgOperator<float>&,
                                                       const Eigen::MatrixXd&, Eigen::MatrixXd&,
                                                       const CgOptions&, const ProgressCallback&);
@@ -204,6 +226,9 @@ template SolveReport conjugateGradient<double, double>(const CgOperator<double>&
                                                        const CgOptions&, const ProgressCallback&);
 template SolveReport conjugateGradient<float, float>(const CgOperator<float, float>&,
                                                      const Eigen::MatrixXf&, Eigen::MatrixXf&,
+                                                     const CgOptions&, const ProgressCallback&);
+template SolveReport conjugateGradient<float, float>(const CgOperator<float, float>&,
+                                                     Eigen::MatrixXf&&, Eigen::MatrixXf&,
                                                      const CgOptions&, const ProgressCallback&);
 
 SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,

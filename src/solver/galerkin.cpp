@@ -207,7 +207,7 @@ namespace detail {
 // diagonal entry already gives (J, K). The extra entries carry zeros, which add nothing.
 template <typename T>
 Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
-                         std::span<const T> stencils, const std::vector<T>& rowSums,
+                         std::span<const T> stencils, std::span<const T> rowSums,
                          const GridLevel& coarse) {
   if (stencils.size() != static_cast<size_t>(system.stencilSize) ||
       rowSums.size() != static_cast<size_t>(fine.slotCount) ||
@@ -247,7 +247,7 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
       f(r, static_cast<double>(rowSums[static_cast<size_t>(s)]) - off);
       return;
     }
-    const auto j = static_cast<size_t>(boundaryIndexOf(fine, system, r));
+    const auto j = static_cast<size_t>(system.boundaryIndex.rank(r));
     const SlotCsr& rows = system.boundaryRows;
     const int64_t offEnd = system.offBlockEnd[j];
     double rounding = 0.0;  // of the couplings to interior texels, which their stencils hold in T
@@ -266,10 +266,10 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
 }
 
 template Sparse galerkinFromLevel<float>(const GridLevel&, const LevelSystem&,
-                                         std::span<const float>, const std::vector<float>&,
+                                         std::span<const float>, std::span<const float>,
                                          const GridLevel&);
 template Sparse galerkinFromLevel<double>(const GridLevel&, const LevelSystem&,
-                                          std::span<const double>, const std::vector<double>&,
+                                          std::span<const double>, std::span<const double>,
                                           const GridLevel&);
 
 }  // namespace detail

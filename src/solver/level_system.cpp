@@ -154,7 +154,7 @@ int unknownOfBoundary(const GridLevel& level, const LevelSystem& system, int j) 
 int64_t countEntries(const SparseSum& a, int u, const LevelSystem& system, bool isBoundary) {
   int64_t count = 0;
   for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e)
-    count += (system.boundaryOfUnknown[static_cast<size_t>(a.inner()[e])] >= 0) == isBoundary;
+    count += system.boundaryIndex.contains(a.inner()[e]) == isBoundary;
   return count;
 }
 
@@ -187,9 +187,9 @@ Eigen::SparseMatrix<double> boundaryBlock(const GridLevel& level, const SparseSu
     int64_t out = start[static_cast<size_t>(j)];
     const int u = unknownOfBoundary(level, system, j);
     for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
-      const int jb = system.boundaryOfUnknown[static_cast<size_t>(a.inner()[e])];
-      if (jb < 0) continue;
-      bb.innerIndexPtr()[out] = jb;
+      const int v = a.inner()[e];
+      if (!system.boundaryIndex.contains(v)) continue;
+      bb.innerIndexPtr()[out] = system.boundaryIndex.rank(v);
       bb.valuePtr()[out++] = a.value(e);
     }
   });
@@ -201,38 +201,53 @@ Eigen::SparseMatrix<double> boundaryBlock(const GridLevel& level, const SparseSu
 void assignInteriorNextToBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system) {
   SlotCsr& fix = system.interiorNextToBoundary;
   // Few interior unknowns touch the boundary: count their boundary entries on all cores.
-  const std::vector<int32_t>& interior = system.interiorUnknowns;
-  std::vector<uint8_t> touching(interior.size(), 0);  // at most 9 (a 3 x 3 stencil row)
-  tbb::parallel_for(size_t(0), interior.size(), [&](size_t k) {
-    touching[k] = static_cast<uint8_t>(countEntries(a, interior[k], system, true));
+  const int n = level.unknownCount();
+  std::vector<uint8_t> touching(static_cast<size_t>(n), 0);  // at most 9 (a 3 x 3 stencil row)
+  tbb::parallel_for(0, n, [&](int u) {
+    if (!system.boundaryIndex.contains(u))
+      touching[static_cast<size_t>(u)] = static_cast<uint8_t>(countEntries(a, u, system, true));
   });
   size_t rows = 0;
   for (uint8_t count : touching) rows += count > 0;
   fix.ptr.assign(rows + 1, 0);
   system.fixupSlots.resize(rows);
   size_t row = 0;
-  for (size_t k = 0; k < interior.size(); ++k) {
-    if (touching[k] == 0) continue;
-    fix.ptr[row + 1] = touching[k];
-    system.fixupSlots[row++] = level.slotOfUnknown[static_cast<size_t>(interior[k])];
+  for (int u = 0; u < n; ++u) {
+    if (touching[static_cast<size_t>(u)] == 0) continue;
+    fix.ptr[row + 1] = touching[static_cast<size_t>(u)];
+    system.fixupSlots[row++] = level.slotOfUnknown[static_cast<size_t>(u)];
   }
   fix.col.resize(static_cast<size_t>(countsToStarts(fix.ptr)));
   fix.val.resize(fix.col.size());
   row = 0;
-  for (size_t k = 0; k < interior.size(); ++k) {
-    if (touching[k] == 0) continue;
+  for (int u = 0; u < n; ++u) {
+    if (touching[static_cast<size_t>(u)] == 0) continue;
     int64_t out = fix.ptr[row++];
-    const int u = interior[k];
     for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
-      const int jb = system.boundaryOfUnknown[static_cast<size_t>(a.inner()[e])];
-      if (jb < 0) continue;
-      fix.col[static_cast<size_t>(out)] = jb;
+      const int v = a.inner()[e];
+      if (!system.boundaryIndex.contains(v)) continue;
+      fix.col[static_cast<size_t>(out)] = system.boundaryIndex.rank(v);
       fix.val[static_cast<size_t>(out++)] = a.value(e);
     }
   }
 }
 
 }  // namespace
+
+void BoundaryIndex::assign(const std::vector<uint8_t>& interior) {
+  const size_t words = (interior.size() + 63) / 64;
+  bits_.assign(words, 0);
+  before_.assign(words, 0);
+  for (size_t u = 0; u < interior.size(); ++u)
+    if (!interior[u]) bits_[u >> 6] |= uint64_t{1} << (u & 63);
+  int32_t count = 0;
+  for (size_t w = 0; w < words; ++w) {
+    before_[w] = count;
+    count += std::popcount(bits_[w]);
+  }
+}
+
+int64_t BoundaryIndex::storageBytes() const { return capacityBytes(bits_, before_); }
 
 void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRowReach,
                    LevelSystem& system) {
@@ -248,23 +263,15 @@ void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRow
   });
   if (weakRowReach > 0) lockNearWeakRows(level, pattern, weakRowReach, interior);
   system.kind.assign(static_cast<size_t>(level.slotCount), SlotKind::Empty);
-  system.boundaryOfUnknown.assign(static_cast<size_t>(n), -1);
+  system.boundaryIndex.assign(interior);
   const auto interiorCount = static_cast<size_t>(std::count(interior.begin(), interior.end(), 1));
   system.boundarySlots.clear();
   system.boundarySlots.reserve(static_cast<size_t>(n) - interiorCount);
-  system.interiorUnknowns.clear();
-  system.interiorUnknowns.reserve(interiorCount);
   for (int u = 0; u < n; ++u) {
     const size_t su = static_cast<size_t>(u);
     const int32_t slot = level.slotOfUnknown[su];
-    if (interior[su]) {
-      system.kind[static_cast<size_t>(slot)] = SlotKind::Interior;
-      system.interiorUnknowns.push_back(u);
-    } else {
-      system.kind[static_cast<size_t>(slot)] = SlotKind::Boundary;
-      system.boundaryOfUnknown[su] = static_cast<int32_t>(system.boundarySlots.size());
-      system.boundarySlots.push_back(slot);
-    }
+    system.kind[static_cast<size_t>(slot)] = interior[su] ? SlotKind::Interior : SlotKind::Boundary;
+    if (!interior[su]) system.boundarySlots.push_back(slot);
   }
   system.interiorTotal = static_cast<int>(interiorCount);
   collectRows(level, system);
@@ -272,25 +279,6 @@ void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRow
   const Eigen::SparseMatrix<double> bb = boundaryBlock(level, pattern, system);
   system.boundaryNonZeros = bb.nonZeros();
   if (system.boundaryCount() > 0) system.boundarySolver.analyzePattern(bb);
-}
-
-void indexUnknowns(const GridLevel& level, LevelSystem& system) {
-  const int n = level.unknownCount();
-  if (system.boundaryOfUnknown.size() == static_cast<size_t>(n)) return;
-  system.boundaryOfUnknown.assign(static_cast<size_t>(n), -1);
-  for (int j = 0; j < system.boundaryCount(); ++j)
-    system.boundaryOfUnknown[static_cast<size_t>(unknownOfBoundary(level, system, j))] = j;
-  system.interiorUnknowns.clear();
-  system.interiorUnknowns.reserve(static_cast<size_t>(system.interiorTotal));
-  for (int u = 0; u < n; ++u)
-    if (system.kind[static_cast<size_t>(level.slotOfUnknown[static_cast<size_t>(u)])] ==
-        SlotKind::Interior)
-      system.interiorUnknowns.push_back(u);
-}
-
-void releaseUnknownIndex(LevelSystem& system) {
-  std::vector<int32_t>().swap(system.boundaryOfUnknown);
-  std::vector<int32_t>().swap(system.interiorUnknowns);
 }
 
 void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system) {
@@ -314,7 +302,7 @@ void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& sys
     system.offBlockEnd[sj] = on;
     for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
       const size_t row = static_cast<size_t>(a.inner()[e]);
-      int64_t& out = system.boundaryOfUnknown[row] < 0 ? off : on;
+      int64_t& out = system.boundaryIndex.contains(static_cast<int>(row)) ? on : off;
       rows.col[static_cast<size_t>(out)] = level.slotOfUnknown[row];
       rows.val[static_cast<size_t>(out++)] = a.value(e);
     }
@@ -322,23 +310,9 @@ void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& sys
   assignInteriorNextToBoundary(level, a, system);
 }
 
-int boundaryIndexOf(const GridLevel& level, const LevelSystem& system, int u) {
-  const auto& slots = system.boundarySlots;
-  return static_cast<int>(std::lower_bound(slots.begin(), slots.end(), u,
-                                           [&](int32_t slot, int v) {
-                                             return level.unknownOfSlot[static_cast<size_t>(slot)] <
-                                                    v;
-                                           }) -
-                          slots.begin());
-}
-
-void factoriseBoundary(const GridLevel& level, LevelSystem& system, const SparseSum* a) {
+void factoriseBoundary(const GridLevel& level, LevelSystem& system) {
   const int nb = system.boundaryCount();
   if (nb == 0) return;
-  if (a) {  // the unknown index is held: no bisection per entry
-    system.boundarySolver.factorize(boundaryBlock(level, *a, system));
-    return;
-  }
   const SlotCsr& rows = system.boundaryRows;
   const auto blockBegin = [&](int j) { return system.offBlockEnd[static_cast<size_t>(j)]; };
   const auto blockEnd = [&](int j) { return rows.ptr[static_cast<size_t>(j) + 1]; };
@@ -359,7 +333,7 @@ void factoriseBoundary(const GridLevel& level, LevelSystem& system, const Sparse
     int out = bb.outerIndexPtr()[j];
     for (int64_t e = blockBegin(j); e != blockEnd(j); ++e) {
       const int u = level.unknownOfSlot[static_cast<size_t>(rows.col[static_cast<size_t>(e)])];
-      bb.innerIndexPtr()[out] = boundaryIndexOf(level, system, u);
+      bb.innerIndexPtr()[out] = system.boundaryIndex.rank(u);
       bb.valuePtr()[out++] = rows.val[static_cast<size_t>(e)];
     }
   });
@@ -389,12 +363,13 @@ int firstUnknownFrom(const GridLevel& level, int y) {
 
 template <typename T>
 void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSystem& system,
-                    PageArray<T>& stencils, const std::function<void(int)>& consumed) {
+                    PageArray<T>& stencils, bool ownPages,
+                    const std::function<void(int)>& consumed) {
   // A new array fills page by page on pages of its own while `a` is released (consumed), else it
   // comes from the heap (where it may take a freed block's place); an update of the same size
   // refills the one it has.
   if (stencils.size() != static_cast<size_t>(system.stencilSize))
-    stencils = PageArray<T>(static_cast<size_t>(system.stencilSize), static_cast<bool>(consumed));
+    stencils = PageArray<T>(static_cast<size_t>(system.stencilSize), ownPages);
   auto fillRun = [&](const SlotRow& row, int q) {
     const int64_t n = row.runLength(q);
     T* w = stencils.data() + row.coeffsOf(q);
@@ -434,13 +409,14 @@ void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSyste
 }
 
 template void assignStencils<float>(const GridLevel&, const SparseSum&, const LevelSystem&,
-                                    PageArray<float>&, const std::function<void(int)>&);
+                                    PageArray<float>&, bool, const std::function<void(int)>&);
 template void assignStencils<double>(const GridLevel&, const SparseSum&, const LevelSystem&,
-                                     PageArray<double>&, const std::function<void(int)>&);
+                                     PageArray<double>&, bool, const std::function<void(int)>&);
 
 int64_t LevelSystem::storageBytes() const {
-  return capacityBytes(kind, rows[0], rows[1], boxRows, bands, boundarySlots, boundaryOfUnknown,
-                       interiorUnknowns, offBlockEnd, fixupSlots) +
+  return capacityBytes(kind, rows[0], rows[1], boxRows, bands, boundarySlots, offBlockEnd,
+                       fixupSlots) +
+         boundaryIndex.storageBytes() +
          capacityBytes(boundaryRows.ptr, boundaryRows.col, interiorNextToBoundary.ptr,
                        interiorNextToBoundary.col) +
          capacityBytes(boundaryRows.val, interiorNextToBoundary.val) +

@@ -4,6 +4,7 @@
 
 #include <Eigen/SparseCore>
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -56,6 +57,31 @@ struct SlotCsr {
   std::vector<double> val;   ///< entry values
 };
 
+/// Which unknowns of a level are boundary unknowns and each one's compact boundary index (the
+/// number of boundary unknowns before it) in 1.5 bits per unknown: a bit per unknown and a
+/// running count per 64-bit word (rank over a bit vector), where an index per unknown took 32.
+class BoundaryIndex {
+ public:
+  /// Marks unknown u as a boundary unknown when interior[u] == 0.
+  void assign(const std::vector<uint8_t>& interior);
+  /// True if unknown u is a boundary unknown.
+  bool contains(int u) const {
+    return (bits_[static_cast<size_t>(u) >> 6] >> (u & 63)) & 1u;
+  }
+  /// Compact index of unknown u if it is a boundary unknown, else of the next one.
+  int rank(int u) const {
+    const size_t word = static_cast<size_t>(u) >> 6;
+    const uint64_t below = bits_[word] & ((uint64_t{1} << (u & 63)) - 1);
+    return before_[word] + std::popcount(below);
+  }
+  /// Bytes held.
+  int64_t storageBytes() const;
+
+ private:
+  std::vector<uint64_t> bits_;   ///< bit u & 63 of word u >> 6: unknown u is a boundary unknown
+  std::vector<int32_t> before_;  ///< per word: boundary unknowns in the words before it
+};
+
 /// Interior/boundary split and the double-precision boundary data of one level.
 struct LevelSystem {
   std::vector<SlotKind> kind;              ///< per slot
@@ -65,10 +91,8 @@ struct LevelSystem {
   std::vector<SlotRow> boxRows;
   std::vector<RowBand> bands;              ///< bands of boxRows, in order
   std::vector<int32_t> boundarySlots;      ///< compact boundary index -> slot
-  /// Per unknown: compact boundary index or -1. Like interiorUnknowns, only held while the level
-  /// is classified or assigned (indexUnknowns, releaseUnknownIndex).
-  std::vector<int32_t> boundaryOfUnknown;
-  std::vector<int32_t> interiorUnknowns;   ///< unknowns relaxed by Gauss–Seidel, increasing
+  /// Boundary unknowns and their compact indices; the other unknowns are relaxed by Gauss–Seidel.
+  BoundaryIndex boundaryIndex;
   int interiorTotal = 0;                   ///< number of interior unknowns
   int64_t stencilSize = 0;                 ///< coefficients over all runs (kStencilPlanes per slot)
   int64_t nonZeros = 0;                    ///< non-zeros of A^l
@@ -105,36 +129,25 @@ bool rowIsStencil(const GridLevel& level, const SparseSum& pattern, int u);
 void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRowReach,
                    LevelSystem& system);
 
-/// Rebuilds boundaryOfUnknown and interiorUnknowns of a classified level from kind and
-/// boundarySlots, unless they are held; the numeric phase (assignBoundary, assignLines) reads them.
-void indexUnknowns(const GridLevel& level, LevelSystem& system);
-
-/// Frees boundaryOfUnknown and interiorUnknowns (8 bytes per unknown) between set-ups.
-void releaseUnknownIndex(LevelSystem& system);
-
-/// Numeric phase for the boundary: fills boundaryRows / offBlockEnd. Needs indexUnknowns.
+/// Numeric phase for the boundary: fills boundaryRows / offBlockEnd.
 void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system);
 
-/// Compact boundary index of boundary unknown u: a bisection over the boundary unknowns, which
-/// grow with the index (classifyLevel), so no per-unknown index need be held.
-int boundaryIndexOf(const GridLevel& level, const LevelSystem& system, int u);
-
-/// Factorises A_bb^l (system.boundarySolver): read from `a` where given (needs indexUnknowns),
-/// else from the assigned boundary rows, so that a caller can release A first and a handed-over
-/// A^0 never coexists with CHOLMOD's copy of the block and the factorisation's work.
-void factoriseBoundary(const GridLevel& level, LevelSystem& system,
-                       const SparseSum* a = nullptr);
+/// Factorises A_bb^l (system.boundarySolver) from the assigned boundary rows, so that a caller
+/// can release A first and a handed-over A^0 never coexists with CHOLMOD's copy of the block and
+/// the factorisation's work.
+void factoriseBoundary(const GridLevel& level, LevelSystem& system);
 
 /// Numeric phase for the interior: the stencil planes of every run (see SlotRow) from the rows of
 /// `a` at interior unknowns; the other slots of a run get zero coefficients and mask 0. The runs
 /// are filled a band of lattice rows at a time, upward; a new PageArray (unless `stencils` has
-/// the size already) is on pages of its own if `consumed` is given, so that it becomes resident
-/// as it is filled, else from the heap. After each band, `consumed(u)`, if given, learns that no
-/// column of `a` before unknown u is read again (level 0 numbers its unknowns row by row), so
-/// that a caller owning `a` can release it meanwhile.
+/// the size already) is on pages of its own if `ownPages`, so that it becomes resident as it is
+/// filled, else from the heap. After each band, `consumed(u)`, if given, learns that no column
+/// of `a` before unknown u is read again (level 0 numbers its unknowns row by row), so that a
+/// caller owning `a` can release it meanwhile; after the last band u is the unknown count.
 template <typename T>
 void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSystem& system,
-                    PageArray<T>& stencils, const std::function<void(int)>& consumed = {});
+                    PageArray<T>& stencils, bool ownPages = false,
+                    const std::function<void(int)>& consumed = {});
 
 /// Pᵀ Ã P for the bilinear prolongation P from `fine` to `coarse`, where Ã is A^l as the fine
 /// level's assigned data hold it, read without a matrix: an interior row is its stencil at all 9
@@ -150,7 +163,7 @@ void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSyste
 template <typename T>
 Eigen::SparseMatrix<double> galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
                                               std::span<const T> stencils,
-                                              const std::vector<T>& rowSums,
+                                              std::span<const T> rowSums,
                                               const GridLevel& coarse);
 
 }  // namespace texgrad::detail

@@ -171,10 +171,10 @@ void assignLines(const GridLevel& level, const SparseSum& a, const LevelSystem& 
                  double ratio, LineSet& set, std::vector<T>& coeffs) {
   set = LineSet{};
   coeffs.clear();
-  if (ratio <= 0.0 || system.interiorUnknowns.empty()) return;
+  if (ratio <= 0.0 || system.interiorCount() == 0) return;
   std::vector<uint8_t> roles(static_cast<size_t>(level.slotCount), kOff);
-  tbb::parallel_for(size_t(0), system.interiorUnknowns.size(), [&](size_t k) {
-    const int u = system.interiorUnknowns[k];
+  tbb::parallel_for(0, level.unknownCount(), [&](int u) {
+    if (system.boundaryIndex.contains(u)) return;
     roles[static_cast<size_t>(level.slotOfUnknown[static_cast<size_t>(u)])] =
         strongAxis(stencilRow(level, a, u), ratio);
   });

@@ -179,7 +179,7 @@ struct MultigridSolver<Scalar>::Impl {
   std::vector<Level> levels;
   std::vector<int64_t> nonZeros;  // per level, of A^l
   std::vector<int64_t> heldMatrixBytes;  // per level (MultigridLevelInfo::setUpMatrixBytes)
-  std::vector<T> rowSums;  // per slot of level 0: sum of A^0's row (applyOperator, A^1's set-up)
+  PageArray<T> rowSums;  // per slot of level 0: sum of A^0's row (applyOperator, A^1's set-up)
   CholmodSolver coarseSolver;
   Eigen::MatrixXd coarseWork;
   MultigridStats stats;
@@ -262,19 +262,19 @@ struct MultigridSolver<Scalar>::Impl {
         if (symbolicPhase)
           detail::classifyLevel(grid, a, l == 0 ? options.weakRowReach : 0, lv.sys);
         if (numericPhase) {
-          detail::indexUnknowns(grid, lv.sys);
-          if (l == 0) assignRowSums(grid, a);
           detail::assignBoundary(grid, a, lv.sys);
-          if (!factoriseLast) detail::factoriseBoundary(grid, lv.sys, &a);
+          if (!factoriseLast) detail::factoriseBoundary(grid, lv.sys);
           detail::assignLines<T>(grid, a, lv.sys, options.lineRatio, lv.lines, lv.lineCoeffs);
         }
-        // The cycles never read the unknown index, nor does assignStencils: it goes before the
-        // stencils, the level's largest array, are allocated (lower peak memory).
-        detail::releaseUnknownIndex(lv.sys);
-        if (numericPhase)
-          detail::assignStencils<T>(grid, a, lv.sys, lv.stencil,
-                                    fromLevelData && handedOver ? releaser(*handedOver)
-                                                                : std::function<void(int)>());
+        if (numericPhase) {
+          // Level 0's row sums come band by band with its stencils, before the band's columns
+          // of a handed-over A^0 are released: on pages of their own then, they become
+          // resident as A^0 stops being.
+          const bool release = fromLevelData && handedOver;
+          std::function<void(int)> consumed;
+          if (l == 0) consumed = rowSummer(grid, a, release ? releaser(*handedOver) : nullptr);
+          detail::assignStencils<T>(grid, a, lv.sys, lv.stencil, release, consumed);
+        }
       }
       if (l == coarsest()) {
         // A one-level hierarchy is solved directly: only then is A^0 formed (unless handed over).
@@ -298,7 +298,8 @@ struct MultigridSolver<Scalar>::Impl {
         Eigen::SparseMatrix<double> formed =
             detail::galerkinFromLevel(grid, lv.sys, std::span<const T>(lv.stencil.data(),
                                                                       lv.stencil.size()),
-                                      rowSums, hierarchy.level(l + 1));
+                                      std::span<const T>(rowSums.data(), rowSums.size()),
+                                      hierarchy.level(l + 1));
         next.swap(formed);
       }
       heldMatrixBytes[sl] +=
@@ -325,15 +326,29 @@ struct MultigridSolver<Scalar>::Impl {
     };
   }
 
-  /// rowSums from the level-0 operator (columns of the symmetric A: its rows).
-  void assignRowSums(const GridLevel& grid, const SparseSum& a) {
-    rowSums.assign(static_cast<size_t>(grid.slotCount), T(0));
-    tbb::parallel_for(tbb::blocked_range<int>(0, grid.unknownCount(), 4096),
+  /// For assignStencils at level 0: a callback that, given u, sums the rows before u not summed
+  /// yet (sumRows), then passes u on to `then` if given. rowSums is allocated first, on pages of
+  /// its own if `then` releases A^0, zero where no unknown is. Only interior rows' sums are read
+  /// (the difference form of the interior rows), and every interior row lies in a band.
+  std::function<void(int)> rowSummer(const GridLevel& grid, const SparseSum& a,
+                                     std::function<void(int)> then) {
+    if (rowSums.size() != static_cast<size_t>(grid.slotCount))
+      rowSums = PageArray<T>::zeros(static_cast<size_t>(grid.slotCount), static_cast<bool>(then));
+    return [this, &grid, &a, then = std::move(then), done = 0](int end) mutable {
+      if (end > done) sumRows(grid, a, done, end);
+      done = std::max(done, end);
+      if (then) then(end);
+    };
+  }
+
+  /// rowSums at unknowns [begin, end) of level 0 (columns of the symmetric A: its rows).
+  void sumRows(const GridLevel& grid, const SparseSum& a, int begin, int end) {
+    tbb::parallel_for(tbb::blocked_range<int>(begin, end, 4096),
                       [&](const tbb::blocked_range<int>& range) {
                         for (int u = range.begin(); u != range.end(); ++u) {
                           double sum = 0.0;
                           for (int e = a.outer()[u]; e < a.outer()[u + 1]; ++e) sum += a.value(e);
-                          rowSums[static_cast<size_t>(grid.slotOfUnknown[static_cast<size_t>(u)])] =
+                          rowSums.data()[grid.slotOfUnknown[static_cast<size_t>(u)]] =
                               static_cast<T>(sum);
                         }
                       });
@@ -832,7 +847,7 @@ template <typename Scalar>
 int64_t MultigridSolver<Scalar>::storageBytes() const {
   const Impl& m = *impl_;
   int64_t bytes = m.hierarchy.storageBytes() + m.coarseSolver.storageBytes() +
-                  capacityBytes(m.rowSums) +
+                  static_cast<int64_t>(m.rowSums.bytes()) +
                   static_cast<int64_t>(m.coarseWork.size()) * int64_t(sizeof(double));
   for (const auto& lv : m.levels) {
     bytes += lv.sys.storageBytes() + static_cast<int64_t>(lv.stencil.bytes()) +

@@ -108,6 +108,21 @@ TEST(PageAllocator, ArraysBecomeResidentAsTheyAreWritten) {
   EXPECT_EQ(heap.size(), 0u);
 }
 
+TEST(PageAllocator, ZeroArraysReadZeroOnTheirOwnPagesAndOnTheHeap) {
+  // A mapped block is zero already and stays unresident until written; a heap block is written.
+  for (const size_t count : {size_t(3), kOwnPagesMinBytes / sizeof(float) * 2})
+    for (const bool ownPages : {true, false}) {
+      {  // leave a freed heap block of the size behind, with nonzero values
+        PageArray<float> dirty(count, false);
+        std::fill_n(dirty.data(), count, 7.0f);
+      }
+      const PageArray<float> zeros = PageArray<float>::zeros(count, ownPages);
+      ASSERT_EQ(zeros.size(), count);
+      EXPECT_TRUE(std::all_of(zeros.data(), zeros.data() + count, [](float v) { return v == 0.0f; }))
+          << count << " values, own pages " << ownPages;
+    }
+}
+
 TEST(PageAllocator, DiscardedPagesOfAHeapBlockStopBeingResidentAndReadZero) {
   if (!detail::ownPagesAvailable()) GTEST_SKIP() << "discarding does nothing here";
   // 64 KB: below glibc's mmap threshold (128 KB at least), so a block of the heap proper.

@@ -209,6 +209,13 @@ TEST(ConjugateGradient, FloatIteratesReachTheirToleranceInTheTrueResidual) {
       const SolveReport floated =
           conjugateGradient(multigridOperator<float, float>(mg), bf, xf, options);
       ASSERT_TRUE(floated.converged) << floated.toString();
+      // B handed over (its storage becomes the residual): the same iterates, bit for bit.
+      Eigen::MatrixXf xMoved = start.cast<float>();
+      Eigen::MatrixXf bMoved = bf;
+      const SolveReport moved = conjugateGradient(multigridOperator<float, float>(mg),
+                                                  std::move(bMoved), xMoved, options);
+      EXPECT_EQ(moved.residuals, floated.residuals);
+      EXPECT_TRUE(xMoved == xf);
       const double trueResidual = (b - a * xf.cast<double>()).norm() / b.norm();
       EXPECT_LT(trueResidual, 1.5 * kFloatIterateTolerance)
           << "screening " << c.screening << (fromZero ? ", from zero" : ", from a guess");

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <limits>
 #include <span>
@@ -57,9 +58,7 @@ std::vector<T> rowSumsOf(const GridLevel& fine, const Eigen::SparseMatrix<double
 detail::LevelSystem boundaryAssigned(const GridLevel& fine, const Eigen::SparseMatrix<double>& a) {
   detail::LevelSystem system;
   detail::classifyLevel(fine, a, MultigridOptions().weakRowReach, system);
-  detail::indexUnknowns(fine, system);
   detail::assignBoundary(fine, a, system);
-  detail::releaseUnknownIndex(system);
   detail::factoriseBoundary(fine, system);
   return system;
 }
@@ -148,6 +147,26 @@ TEST(LevelGalerkin, CoarseOperatorFromLevelDataEqualsTheProductOfA0) {
     }
 }
 
+TEST(LevelGalerkin, BoundaryIndexCountsTheBoundaryUnknownsBeforeEachUnknown) {
+  // Across word boundaries (64 unknowns a word): sizes around them, all-boundary, none, mixed.
+  std::srand(7);
+  for (const size_t n : {size_t(0), size_t(1), size_t(63), size_t(64), size_t(65), size_t(300)})
+    for (const int pattern : {0, 1, 2}) {
+      std::vector<uint8_t> interior(n);
+      for (uint8_t& i : interior)
+        i = static_cast<uint8_t>(pattern == 2 ? std::rand() % 2 : pattern);
+      detail::BoundaryIndex index;
+      index.assign(interior);
+      int before = 0;
+      for (size_t u = 0; u < n; ++u) {
+        const int v = static_cast<int>(u);
+        EXPECT_EQ(index.contains(v), interior[u] == 0) << n << " unknowns, unknown " << u;
+        EXPECT_EQ(index.rank(v), before) << n << " unknowns, unknown " << u;
+        before += interior[u] == 0;
+      }
+    }
+}
+
 TEST(LevelGalerkin, BoundaryFactorisationFromTheBoundaryRowsIsThatOfA0sBoundaryBlock) {
   // factoriseBoundary reads A_bb from the boundary rows (A^0 may be gone by then): it must
   // factorise A^0 restricted to the boundary unknowns, seams' far-away entries included.
@@ -163,7 +182,8 @@ TEST(LevelGalerkin, BoundaryFactorisationFromTheBoundaryRowsIsThatOfA0sBoundaryB
     const int32_t slot = system.boundarySlots[static_cast<size_t>(j)];
     const int u = fine.unknownOfSlot[static_cast<size_t>(slot)];
     unknownOfBoundary[static_cast<size_t>(j)] = u;
-    EXPECT_EQ(detail::boundaryIndexOf(fine, system, u), j);
+    EXPECT_TRUE(system.boundaryIndex.contains(u));
+    EXPECT_EQ(system.boundaryIndex.rank(u), j);
   }
   Eigen::MatrixXd dense(nb, nb);
   for (int i = 0; i < nb; ++i)
@@ -209,7 +229,7 @@ TEST(LevelGalerkin, StencilsNeverReadAColumnTheyDeclaredConsumed) {
   Eigen::SparseMatrix<double> poisoned = a;
   std::vector<int> declared;
   PageArray<float> stencils;
-  detail::assignStencils<float>(fine, poisoned, system, stencils, [&](int u) {
+  detail::assignStencils<float>(fine, poisoned, system, stencils, true, [&](int u) {
     declared.push_back(u);
     std::fill(poisoned.valuePtr(), poisoned.valuePtr() + poisoned.outerIndexPtr()[u],
               std::numeric_limits<double>::quiet_NaN());

@@ -144,9 +144,9 @@ class SystemSolver {
                     const ProgressCallback& progress = {});
   /// As solve, for B and X in float: CG around float cycles keeps its iterate and residual in
   /// float too where floatIterates() (no double copy of B, X or the residual: 16 bytes per
-  /// texel and channel less); any other solver solves on double copies of them.
-  SolveReport solve(const Eigen::MatrixXf& b, Eigen::MatrixXf& x,
-                    const ProgressCallback& progress = {});
+  /// texel and channel less), the residual in B's storage (pass B with std::move to spare a
+  /// copy); any other solver solves on double copies of them.
+  SolveReport solve(Eigen::MatrixXf b, Eigen::MatrixXf& x, const ProgressCallback& progress = {});
   /// True if solve on float B and X iterates in float: MultigridCg with float cycles on the
   /// level-0 operator, to a tolerance of at least kFloatIterateTolerance.
   bool floatIterates() const;

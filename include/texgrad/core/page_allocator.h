@@ -4,6 +4,8 @@
 // array no longer needs while it lives.
 #pragma once
 
+#include <algorithm>
+
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -95,6 +97,14 @@ class PageArray {
         size_(n),
         ownPages_(ownPages) {}
   ~PageArray() { reset(); }
+  /// n zeros: a block of pages of its own reads as zero already, so only a heap block is
+  /// written (the pages stay unresident until a value is written).
+  static PageArray zeros(std::size_t n, bool ownPages = true) {
+    PageArray array(n, ownPages);
+    const bool mapped = ownPages && array.bytes() >= kOwnPagesMinBytes && detail::ownPagesAvailable();
+    if (!mapped) std::fill_n(array.data_, n, T(0));
+    return array;
+  }
   /// Takes `other`'s values, leaving it empty.
   PageArray(PageArray&& other) noexcept
       : data_(std::exchange(other.data_, nullptr)),

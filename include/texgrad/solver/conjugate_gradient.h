@@ -76,6 +76,16 @@ SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
                               const typename CgOperator<Scalar, Iterate>::Vectors& b,
                               typename CgOperator<Scalar, Iterate>::Vectors& x,
                               const CgOptions& options = {}, const ProgressCallback& progress = {});
+/// As above, with B's storage taken over for the residual: one n x k block less.
+template <typename Scalar, typename Iterate>
+SolveReport conjugateGradient(const CgOperator<Scalar, Iterate>& a,
+                              typename CgOperator<Scalar, Iterate>::Vectors&& b,
+                              typename CgOperator<Scalar, Iterate>::Vectors& x,
+                              const CgOptions& options = {}, const ProgressCallback& progress = {});
+extern template SolveReport conjugateGradient<float, float>(const CgOperator<float, float>&,
+                                                            Eigen::MatrixXf&&, Eigen::MatrixXf&,
+                                                            const CgOptions&,
+                                                            const ProgressCallback&);
 extern template SolveReport conjugateGradient<float, double>(const CgOperator<float>&,
                                                              const Eigen::MatrixXd&,
                                                              Eigen::MatrixXd&, const CgOptions&,
@@ -136,6 +146,6 @@ void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
 /// y = scale A x (n x 1) rounded to float: each value that of the double product above times
 /// `scale`, rounded once, without an n x 1 double in between.
 void symmetricProduct(const Eigen::Ref<const Eigen::SparseMatrix<double>>& a,
-                      const Eigen::VectorXf& x, double scale, Eigen::VectorXf& y);
+                      const Eigen::VectorXf& x, double scale, Eigen::MatrixXf& y);
 
 }  // namespace texgrad
