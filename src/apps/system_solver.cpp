@@ -596,6 +596,7 @@ SolveReport SystemSolver::solve(Eigen::MatrixXf b, Eigen::MatrixXf& x,
                                 const ProgressCallback& progress) {
   if (!floatIterates()) {
     const Eigen::MatrixXd bd = b.cast<double>();
+    b.resize(0, 0);
     Eigen::MatrixXd xd = x.cast<double>();
     try {
       const SolveReport report = solve(bd, xd, progress);

@@ -230,6 +230,12 @@ template SolveReport conjugateGradient<float, float>(const CgOperator<float, flo
 template SolveReport conjugateGradient<float, float>(const CgOperator<float, float>&,
                                                      Eigen::MatrixXf&&, Eigen::MatrixXf&,
                                                      const CgOptions&, const ProgressCallback&);
+template SolveReport conjugateGradient<float, double>(const CgOperator<float>&, Eigen::MatrixXd&&,
+                                                      Eigen::MatrixXd&, const CgOptions&,
+                                                      const ProgressCallback&);
+template SolveReport conjugateGradient<double, double>(const CgOperator<double>&,
+                                                       Eigen::MatrixXd&&, Eigen::MatrixXd&,
+                                                       const CgOptions&, const ProgressCallback&);
 
 SolveReport conjugateGradient(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,
                               Eigen::MatrixXd& x, const Preconditioner& preconditioner,

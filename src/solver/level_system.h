@@ -59,7 +59,7 @@ struct SlotCsr {
 
 /// Which unknowns of a level are boundary unknowns and each one's compact boundary index (the
 /// number of boundary unknowns before it) in 1.5 bits per unknown: a bit per unknown and a
-/// running count per 64-bit word (rank over a bit vector), where an index per unknown took 32.
+/// running count per 64-bit word (rank over a bit vector), where two per-unknown arrays took 64.
 class BoundaryIndex {
  public:
   /// Marks unknown u as a boundary unknown when interior[u] == 0.
@@ -143,7 +143,8 @@ void factoriseBoundary(const GridLevel& level, LevelSystem& system);
 /// the size already) is on pages of its own if `ownPages`, so that it becomes resident as it is
 /// filled, else from the heap. After each band, `consumed(u)`, if given, learns that no column
 /// of `a` before unknown u is read again (level 0 numbers its unknowns row by row), so that a
-/// caller owning `a` can release it meanwhile; after the last band u is the unknown count.
+/// caller owning `a` can release it meanwhile; after the last band u is the unknown count (a
+/// level without interior slots has no band: `consumed` is not called).
 template <typename T>
 void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSystem& system,
                     PageArray<T>& stencils, bool ownPages = false,

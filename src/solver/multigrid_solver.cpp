@@ -209,10 +209,11 @@ struct MultigridSolver<Scalar>::Impl {
   /// chain of Galerkin products instead of two. For l > 0, A^{l+1} is formed before level l's
   /// data are filled in, so the product's temporaries never coexist with them, and A^l is freed
   /// once both exist. Level 0 goes the other way in the numeric phase: its data are filled in
-  /// from A^0; if A^0 was handed over (`handedOver`: the matrix a0 views, owned by the walk),
-  /// its pages are dropped meanwhile, then its boundary block is factorised from the level's
-  /// boundary rows and A^0 freed; then A^1 is formed from level 0's data (galerkinFromLevel), so
-  /// A^0 coexists with neither A^1 nor a factorisation (docs/memory.md).
+  /// from A^0, its row sums band by band with its stencils; if A^0 was handed over
+  /// (`handedOver`: the matrix a0 views, owned by the walk), its pages are dropped meanwhile,
+  /// then its boundary block is factorised (from the boundary rows, as every level's) and A^0
+  /// freed; then A^1 is formed from level 0's data (galerkinFromLevel), so A^0 coexists with
+  /// neither A^1 nor a factorisation (docs/memory.md).
   /// The symbolic phase alone has no level-0 data and forms A^1 from A^0's pattern: the same
   /// pattern (galerkinFromLevel).
   void walkLevels(const SparseSum& a0, bool symbolicPhase, bool numericPhase,
@@ -223,6 +224,7 @@ struct MultigridSolver<Scalar>::Impl {
       nonZeros.assign(levels.size(), 0);
       heldMatrixBytes.assign(levels.size(), 0);
       coarseSolver = CholmodSolver();
+      rowSums = PageArray<T>();
     }
     Eigen::SparseMatrix<double> coarse;  // A^l for l > 0
     SparseSum a = a0;                    // A^l
@@ -327,9 +329,9 @@ struct MultigridSolver<Scalar>::Impl {
   }
 
   /// For assignStencils at level 0: a callback that, given u, sums the rows before u not summed
-  /// yet (sumRows), then passes u on to `then` if given. rowSums is allocated first, on pages of
-  /// its own if `then` releases A^0, zero where no unknown is. Only interior rows' sums are read
-  /// (the difference form of the interior rows), and every interior row lies in a band.
+  /// yet (sumRows), then passes u on to `then` if given. rowSums is allocated first (zeros), on
+  /// pages of its own if `then` releases A^0. Only interior rows' sums are used (the difference
+  /// form of the interior rows), and every interior row lies in a band.
   std::function<void(int)> rowSummer(const GridLevel& grid, const SparseSum& a,
                                      std::function<void(int)> then) {
     if (rowSums.size() != static_cast<size_t>(grid.slotCount))

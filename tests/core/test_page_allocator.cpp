@@ -118,7 +118,8 @@ TEST(PageAllocator, ZeroArraysReadZeroOnTheirOwnPagesAndOnTheHeap) {
       }
       const PageArray<float> zeros = PageArray<float>::zeros(count, ownPages);
       ASSERT_EQ(zeros.size(), count);
-      EXPECT_TRUE(std::all_of(zeros.data(), zeros.data() + count, [](float v) { return v == 0.0f; }))
+      const auto isZero = [](float v) { return v == 0.0f; };
+      EXPECT_TRUE(std::all_of(zeros.data(), zeros.data() + count, isZero))
           << count << " values, own pages " << ownPages;
     }
 }

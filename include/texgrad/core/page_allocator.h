@@ -4,8 +4,8 @@
 // array no longer needs while it lives.
 #pragma once
 
-#include <algorithm>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -101,7 +101,8 @@ class PageArray {
   /// written (the pages stay unresident until a value is written).
   static PageArray zeros(std::size_t n, bool ownPages = true) {
     PageArray array(n, ownPages);
-    const bool mapped = ownPages && array.bytes() >= kOwnPagesMinBytes && detail::ownPagesAvailable();
+    const bool mapped =
+        ownPages && array.bytes() >= kOwnPagesMinBytes && detail::ownPagesAvailable();
     if (!mapped) std::fill_n(array.data_, n, T(0));
     return array;
   }

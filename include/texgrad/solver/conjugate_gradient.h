@@ -87,6 +87,14 @@ extern template SolveReport conjugateGradient<float, float>(const CgOperator<flo
                                                             const CgOptions&,
                                                             const ProgressCallback&);
 extern template SolveReport conjugateGradient<float, double>(const CgOperator<float>&,
+                                                             Eigen::MatrixXd&&, Eigen::MatrixXd&,
+                                                             const CgOptions&,
+                                                             const ProgressCallback&);
+extern template SolveReport conjugateGradient<double, double>(const CgOperator<double>&,
+                                                              Eigen::MatrixXd&&, Eigen::MatrixXd&,
+                                                              const CgOptions&,
+                                                              const ProgressCallback&);
+extern template SolveReport conjugateGradient<float, double>(const CgOperator<float>&,
                                                              const Eigen::MatrixXd&,
                                                              Eigen::MatrixXd&, const CgOptions&,
                                                              const ProgressCallback&);
