@@ -337,8 +337,10 @@ struct MultigridSolver<Scalar>::Impl {
     if (rowSums.size() != static_cast<size_t>(grid.slotCount))
       rowSums = PageArray<T>::zeros(static_cast<size_t>(grid.slotCount), static_cast<bool>(then));
     return [this, &grid, &a, then = std::move(then), done = 0](int end) mutable {
-      if (end > done) sumRows(grid, a, done, end);
-      done = std::max(done, end);
+      if (end > done) {
+        sumRows(grid, a, done, end);
+        done = end;
+      }
       if (then) then(end);
     };
   }

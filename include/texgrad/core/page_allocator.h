@@ -4,7 +4,6 @@
 // array no longer needs while it lives.
 #pragma once
 
-
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
