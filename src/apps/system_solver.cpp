@@ -203,20 +203,26 @@ struct SystemSolver::Impl {
   }
 
   /// True while the solves need A itself, or the caller asked for it (MatrixCopy).
-  bool keepsMatrix() const {
-    if (copy == MatrixCopy::Kept) return true;
-    if (refinesOnLevelZero()) return false;
-    return !settings.cgUsesLevelZeroOperator();
+  bool keepsMatrix() const { return keepsMatrixFor(settings, copy, multigridFloat != nullptr); }
+
+  /// keepsMatrix() of a solver with these settings and copy, cycling in float or not.
+  static bool keepsMatrixFor(const SolverSettings& s, MatrixCopy c, bool floatCycles) {
+    if (c == MatrixCopy::Kept) return true;
+    if (refinesOnLevelZeroFor(s, c, floatCycles)) return false;
+    return !s.cgUsesLevelZeroOperator();
   }
 
   /// True if float refinement cycles take their residuals from the level-0 operator and keep no
   /// refinement state between solves (MatrixCopy::NotForRefinement): not for a tolerance below
   /// kFloatOperatorTolerance, which those residuals' float rounding would not let them reach.
   bool refinesOnLevelZero() const {
-    return copy == MatrixCopy::NotForRefinement && settings.kind == SolverKind::Multigrid &&
-           multigridFloat != nullptr &&
-           (settings.tolerance == 0.0 ||
-            settings.tolerance >= SolverSettings::kFloatOperatorTolerance);
+    return refinesOnLevelZeroFor(settings, copy, multigridFloat != nullptr);
+  }
+
+  /// refinesOnLevelZero() of a solver with these settings and copy, cycling in float or not.
+  static bool refinesOnLevelZeroFor(const SolverSettings& s, MatrixCopy c, bool floatCycles) {
+    return c == MatrixCopy::NotForRefinement && s.kind == SolverKind::Multigrid && floatCycles &&
+           (s.tolerance == 0.0 || s.tolerance >= SolverSettings::kFloatOperatorTolerance);
   }
 
   /// Takes over `from` as A; hands it to `factorise` (the direct or multigrid set-up), then frees
@@ -243,6 +249,17 @@ struct SystemSolver::Impl {
       setUp(solver, view);
       return 0;
     });
+  }
+
+  /// Hands `from` (A as a FloatSystem) over to `setUp` (a MultigridSolver's update or
+  /// initAndUpdate on it), for a solver that takes it (takesFloatSystem: float cycles, no copy
+  /// of A kept).
+  template <typename SetUp>
+  void adoptFloatSystem(FloatSystem& from, SetUp&& setUp) {
+    Eigen::SparseMatrix<double>().swap(a);
+    rows = from.rows();
+    cacheValid = false;
+    setUp(*multigridFloat, std::move(from));
   }
 
   /// Runs `setUp` (a MultigridSolver's update or initAndUpdate) on the adopted A: as a view
@@ -557,6 +574,50 @@ void SystemSolver::initAndUpdate(Eigen::SparseMatrix<double>&& a,
   });
   impl_->initTime = impl_->initSecondsSince(start);
   impl_->updateTime = 0.0;
+  reportProgress(progress, kSetupStage, 1.0);
+}
+
+bool SystemSolver::takesFloatSystem() const {
+  return impl_->multigridFloat != nullptr && !impl_->keepsMatrix();
+}
+
+bool SystemSolver::takesFloatSystem(const SolverSettings& settings, MatrixCopy copy) {
+  const bool floatCycles = settings.kind != SolverKind::Direct && settings.singlePrecision;
+  return floatCycles && !Impl::keepsMatrixFor(settings, copy, floatCycles);
+}
+
+void SystemSolver::initAndUpdate(FloatSystem&& a, const ProgressCallback& progress) {
+  FloatSystem owned = std::move(a);
+  if (!takesFloatSystem()) {
+    Eigen::SparseMatrix<double> formed = formedMatrix(owned);
+    owned = FloatSystem();
+    initAndUpdate(std::move(formed), progress);
+    return;
+  }
+  reportProgress(progress, kSetupStage, 0.0);
+  const auto start = std::chrono::steady_clock::now();
+  impl_->adoptFloatSystem(owned, [](auto& solver, FloatSystem&& system) {
+    solver.initAndUpdate(std::move(system));
+  });
+  impl_->initTime = impl_->initSecondsSince(start);
+  impl_->updateTime = 0.0;
+  reportProgress(progress, kSetupStage, 1.0);
+}
+
+void SystemSolver::update(FloatSystem&& a, const ProgressCallback& progress) {
+  FloatSystem owned = std::move(a);
+  if (!takesFloatSystem()) {
+    Eigen::SparseMatrix<double> formed = formedMatrix(owned);
+    owned = FloatSystem();
+    update(std::move(formed), progress);
+    return;
+  }
+  reportProgress(progress, kSetupStage, 0.0);
+  const auto start = std::chrono::steady_clock::now();
+  impl_->adoptFloatSystem(owned, [](auto& solver, FloatSystem&& system) {
+    solver.update(std::move(system));
+  });
+  impl_->updateTime = secondsSince(start);
   reportProgress(progress, kSetupStage, 1.0);
 }
 

@@ -3,7 +3,8 @@
 // window's pieces are ever held (docs/memory.md, plan item 6); the same sums as assemble(). A
 // deferred assembly (OperatorOptions::deferAssembly) also holds S's values of a column only until
 // the column is complete: a visitor sees the column of M and S, which becomes alpha M + S in M's
-// values, so S is never held whole.
+// values, so S is never held whole; or, in float (screenedSystemInFloat), a FloatSystem's entries,
+// M's values then held by window too.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
@@ -18,6 +19,7 @@
 
 #include "texel_operators_impl.h"
 #include "texgrad/core/error.h"
+#include "texgrad/core/page_allocator.h"
 
 namespace texgrad {
 namespace {
@@ -121,7 +123,7 @@ void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMet
   stiffnessValues.assign(static_cast<size_t>(mass.nonZeros()), 0.0);  // M's: zeros already
   const int windows = stream.windows();
   for (int k = 0; k < windows; ++k) {
-    assembleWindow(k, mass.valuePtr(), stiffnessValues.data(), 0);
+    assembleWindow(k, mass.valuePtr(), 0, stiffnessValues.data(), 0);
     reportProgress(progress, "assemble", 0.8 + 0.2 * (k + 1) / windows);
   }
   assembleSeamFaces(mass.valuePtr(), stiffnessValues.data(), nullptr);
@@ -131,7 +133,8 @@ void TexelOperators::Impl::assembleStreamed(std::vector<Eigen::Matrix2d> faceMet
 }
 
 void TexelOperators::Impl::assembleScreened(double alpha, const ColumnVisitor& visit,
-                                            const ProgressCallback& progress) {
+                                            const ProgressCallback& progress,
+                                            FloatSystem* out) {
   const TexelGrid& grid = basis.grid();
   if (grid.unknownOfTexel.empty())
     throw InvalidInputError(
@@ -140,7 +143,16 @@ void TexelOperators::Impl::assembleScreened(double alpha, const ColumnVisitor& v
   const int n = grid.unknownCount();
   const int* outer = mass.outerIndexPtr();
   const int* inner = mass.innerIndexPtr();
-  double* massValues = mass.valuePtr();
+  const auto nonZeros = static_cast<size_t>(mass.nonZeros());
+  // In float, M's values are held by window as S's are, and M's own value array, never touched
+  // (buildPattern leaves it to the assembly), is dropped whatever pages the heap gave it.
+  double* massValues = out ? nullptr : mass.valuePtr();
+  if (out) {
+    detail::discardWholePages(mass.valuePtr(), nonZeros * sizeof(double));
+    *out = FloatSystem(n, mass.outerIndexPtr(), mass.innerIndexPtr(), exactUnknowns());
+  } else {
+    std::fill_n(massValues, nonZeros, 0.0);
+  }
   // Unknowns are numbered row by row: the first unknown in texel row y or above.
   auto firstUnknownOfRow = [&](int y) {
     const int32_t t = std::clamp(y, 0, grid.ny) * grid.nx;
@@ -148,21 +160,33 @@ void TexelOperators::Impl::assembleScreened(double alpha, const ColumnVisitor& v
         std::lower_bound(grid.texelOfUnknown.begin(), grid.texelOfUnknown.end(), t) -
         grid.texelOfUnknown.begin());
   };
-  // Column u of S complete in `s`: its diagonal formed, shown with M's, then alpha M + S.
-  auto finishColumn = [&](int u, double* s) {
+  // Column u of M and S complete in `m` and `s`: S's diagonal formed, shown, then alpha M + S,
+  // in place or into `out` with its sum, in the order the multigrid sums a row.
+  auto finishColumn = [&](int u, double* m, double* s) {
     const int length = outer[u + 1] - outer[u];
     const std::span<const int> rows(inner + outer[u], static_cast<size_t>(length));
-    double* m = massValues + outer[u];
     detail::zeroColumnSum(rows, u, std::span(s, static_cast<size_t>(length)));
     if (visit)
       visit(OperatorColumn{u, rows, std::span<const double>(m, static_cast<size_t>(length)),
                            std::span<const double>(s, static_cast<size_t>(length))});
-    for (int k = 0; k < length; ++k) m[k] = alpha * m[k] + s[k];
+    if (!out) {
+      for (int k = 0; k < length; ++k) m[k] = alpha * m[k] + s[k];
+      return;
+    }
+    double sum = 0.0;
+    for (int k = 0; k < length; ++k) {
+      const double value = alpha * m[k] + s[k];
+      out->set(outer[u] + k, value);
+      sum += value;
+    }
+    out->setRowSum(u, sum);
   };
   const std::vector<int32_t>& seamColumns = stream.seamColumns;
   ColumnValues seamStiffness = columnValuesOf(mass, seamColumns);
-  // S's values of the columns [first, ...) that window k reaches, from position outer[first].
-  std::vector<double> held;
+  ColumnValues seamMass = out ? columnValuesOf(mass, seamColumns) : ColumnValues();
+  // S's (and in float M's) values of the columns [first, ...) that window k reaches, from
+  // position outer[first].
+  std::vector<double> held, heldMass;
   int first = 0;
   const int windows = stream.windows();
   for (int k = 0; k < windows; ++k) {
@@ -171,27 +195,39 @@ void TexelOperators::Impl::assembleScreened(double alpha, const ColumnVisitor& v
     const int cellEnd = firstCellRow(stream.windowBand[k + 1]);
     const int complete = k + 1 == windows ? n : firstUnknownOfRow(cellEnd);
     const int reached = k + 1 == windows ? n : firstUnknownOfRow(cellEnd + 1);
-    held.resize(static_cast<size_t>(outer[reached] - outer[first]), 0.0);
-    assembleWindow(k, massValues, held.data(), outer[first]);
+    const auto span = static_cast<size_t>(outer[reached] - outer[first]);
+    held.resize(span, 0.0);
+    if (out) heldMass.resize(span, 0.0);
+    assembleWindow(k, out ? heldMass.data() : massValues, out ? outer[first] : 0, held.data(),
+                   outer[first]);
     tbb::parallel_for(tbb::blocked_range<int>(first, complete, 1024),
                       [&](const tbb::blocked_range<int>& columns) {
                         for (int u = columns.begin(); u != columns.end(); ++u) {
-                          double* s = held.data() + (outer[u] - outer[first]);
-                          if (!std::binary_search(seamColumns.begin(), seamColumns.end(), u))
-                            finishColumn(u, s);
-                          else
-                            std::copy(s, s + (outer[u + 1] - outer[u]),
-                                      &seamStiffness.at(mass, u, outer[u]));
+                          const int64_t at = outer[u] - outer[first];
+                          double* s = held.data() + at;
+                          double* m = out ? heldMass.data() + at : massValues + outer[u];
+                          if (!std::binary_search(seamColumns.begin(), seamColumns.end(), u)) {
+                            finishColumn(u, m, s);
+                            continue;
+                          }
+                          const int length = outer[u + 1] - outer[u];
+                          std::copy(s, s + length, &seamStiffness.at(mass, u, outer[u]));
+                          if (out) std::copy(m, m + length, &seamMass.at(mass, u, outer[u]));
                         }
                       });
-    held.erase(held.begin(), held.begin() + (outer[complete] - outer[first]));
+    const auto done = static_cast<std::ptrdiff_t>(outer[complete] - outer[first]);
+    held.erase(held.begin(), held.begin() + done);
+    if (out) heldMass.erase(heldMass.begin(), heldMass.begin() + done);
     first = complete;
     reportProgress(progress, "assemble", 0.95 * (k + 1) / windows);
   }
   std::vector<double>().swap(held);
-  assembleSeamFaces(massValues, nullptr, &seamStiffness);
+  std::vector<double>().swap(heldMass);
+  assembleSeamFaces(massValues, nullptr, &seamStiffness, out ? &seamMass : nullptr);
   tbb::parallel_for(size_t(0), seamColumns.size(), [&](size_t i) {
-    finishColumn(seamColumns[i], seamStiffness.values.data() + seamStiffness.start[i]);
+    const int u = seamColumns[i];
+    double* m = out ? seamMass.values.data() + seamMass.start[i] : massValues + outer[u];
+    finishColumn(u, m, seamStiffness.values.data() + seamStiffness.start[i]);
   });
   stream = StreamPlan();
   deferred = false;
@@ -229,8 +265,8 @@ TexelOperators::Impl::FaceBands TexelOperators::Impl::scanFaces(std::vector<uint
   return bands;
 }
 
-void TexelOperators::Impl::assembleWindow(int k, double* massOut, double* stiffnessOut,
-                                          int64_t stiffnessFirst) {
+void TexelOperators::Impl::assembleWindow(int k, double* massOut, int64_t massFirst,
+                                          double* stiffnessOut, int64_t stiffnessFirst) {
   const auto begin = static_cast<size_t>(stream.faceBegin[k]);
   const auto end = static_cast<size_t>(stream.faceBegin[k + 1]);
   const std::span<const int32_t> faces = std::span(stream.faces).subspan(begin, end - begin);
@@ -250,11 +286,12 @@ void TexelOperators::Impl::assembleWindow(int k, double* massOut, double* stiffn
   const PlainPieces pieces = bucketByBand(chunks, lo, hi);
   report.plainFullPieces += static_cast<int>(pieces.full.size());
   report.plainPartialPieces += static_cast<int>(pieces.partial.size());
-  assembleBands(pieces, factors, nullptr, massOut, stiffnessOut, stiffnessFirst);
+  assembleBands(pieces, factors, nullptr, massOut, stiffnessOut, stiffnessFirst, massFirst);
 }
 
 void TexelOperators::Impl::assembleSeamFaces(double* massOut, double* stiffnessOut,
-                                             ColumnValues* stiffnessColumns) {
+                                             ColumnValues* stiffnessColumns,
+                                             ColumnValues* massColumns) {
   const std::vector<int32_t>& seamFaces = stream.seamFaces;
   // Chunks of faces integrated in parallel and added in chunk order (the order of `seam`), a few
   // chunks in flight, as sumOverSurface does.
@@ -280,7 +317,7 @@ void TexelOperators::Impl::assembleSeamFaces(double* massOut, double* stiffnessO
   const auto addInOrder =
       tbb::make_filter<Chunk, void>(tbb::filter_mode::serial_in_order, [&](const Chunk& chunk) {
         assembleSeams(chunk.seam, chunk.texels.data(), chunk.values.data(), factors, nullptr,
-                      massOut, stiffnessOut, stiffnessColumns);
+                      massOut, stiffnessOut, stiffnessColumns, massColumns);
       });
   tbb::parallel_pipeline(static_cast<size_t>(2 * tbb::this_task_arena::max_concurrency()),
                          chunkIndices & integrateChunk & addInOrder);

@@ -12,10 +12,12 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
 
 #include "texel_operators_impl.h"
 #include "texgrad/core/error.h"
+#include "texgrad/core/page_allocator.h"
 #include "texgrad/core/storage_bytes.h"
 
 namespace texgrad {
@@ -299,7 +301,8 @@ void TexelOperators::Impl::buildPattern(const std::vector<uint8_t>& cellCovered)
   mass.resizeNonZeros(outer[n]);
   forEachColumn([&](int u, const std::vector<int32_t>& column) {
     std::copy(column.begin(), column.end(), mass.innerIndexPtr() + outer[u]);
-    std::fill_n(mass.valuePtr() + outer[u], column.size(), 0.0);
+    // A deferred assembly zeroes them when it runs, if it uses them (assembleScreened).
+    if (!deferred) std::fill_n(mass.valuePtr() + outer[u], column.size(), 0.0);
   });
 }
 
@@ -417,14 +420,15 @@ void TexelOperators::Impl::finishStiffness(double* stiffnessOut) const {
 void TexelOperators::Impl::assembleBands(const PlainPieces& pieces,
                                          const std::vector<FaceFactors>& faceFactors,
                                          const double* beta, double* massOut,
-                                         double* stiffnessOut, int64_t stiffnessFirst) const {
+                                         double* stiffnessOut, int64_t stiffnessFirst,
+                                         int64_t massFirst) const {
   const TexelGrid& grid = basis.grid();
   static const detail::BilinearIntegrals unit = detail::bilinearIntegrals(detail::unitCellMoments());
   auto cellBeta = [&](int a, int b) { return beta ? beta[grid.cellIndex(a, b)] : 1.0; };
   auto add = [&](int face, int a, int b, const detail::BilinearIntegrals& in) {
     const FaceFactors& f = faceFactors[face];
     const std::array<int, 16> at = cellEntries(mass, basis.cellTexels(a, b));
-    if (massOut) addCell(at, in.mass, f.mass, massOut);
+    if (massOut) addCell(at, in.mass, f.mass, massOut, massFirst);
     if (stiffnessOut) {
       const Eigen::Matrix4d s = f.xx * in.kxx + f.xy * in.kxy + f.yy * in.kyy;
       addCell(at, s, cellBeta(a, b), stiffnessOut, stiffnessFirst);
@@ -452,9 +456,12 @@ void TexelOperators::Impl::assembleSeams(std::span<const SeamPiece> pieces, cons
                                          const double* values,
                                          const std::vector<FaceFactors>& faceFactors,
                                          const double* beta, double* massOut, double* stiffnessOut,
-                                         ColumnValues* stiffnessColumns) const {
+                                         ColumnValues* stiffnessColumns,
+                                         ColumnValues* massColumns) const {
   const TexelGrid& grid = basis.grid();
-  auto massEntry = [massOut](int, std::ptrdiff_t p) -> double& { return massOut[p]; };
+  auto massEntry = [&](int column, std::ptrdiff_t p) -> double& {
+    return massColumns ? massColumns->at(mass, column, p) : massOut[p];
+  };
   auto stiffnessEntry = [&](int column, std::ptrdiff_t p) -> double& {
     return stiffnessColumns ? stiffnessColumns->at(mass, column, p) : stiffnessOut[p];
   };
@@ -464,7 +471,8 @@ void TexelOperators::Impl::assembleSeams(std::span<const SeamPiece> pieces, cons
     const FaceFactors& f = faceFactors[sp.face];
     const double* v = values + sp.valueBegin;
     const int packed = k * (k + 1) / 2;
-    if (massOut) scatter(mass, texels + sp.texelBegin, k, PackedSymmetric{v}, f.mass, massEntry);
+    if (massOut || massColumns)
+      scatter(mass, texels + sp.texelBegin, k, PackedSymmetric{v}, f.mass, massEntry);
     if (stiffnessOut || stiffnessColumns) {
       combined.resize(static_cast<size_t>(packed));
       for (int i = 0; i < packed; ++i)
@@ -688,6 +696,84 @@ SparseMatrixd TexelOperators::screenedSystem(std::unique_ptr<TexelOperators> ope
   system.swap(impl.mass);  // M's arrays, now alpha M + S, become A's
   operators->addSeamScreening(alpha, system);
   return system;
+}
+
+FloatSystem TexelOperators::screenedSystemInFloat(std::unique_ptr<TexelOperators> operators,
+                                                  double alpha, const ColumnVisitor& visit,
+                                                  const ProgressCallback& progress) {
+  if (!operators) throw InvalidInputError("screenedSystemInFloat: no operators were handed over");
+  Impl& impl = *operators->impl_;
+  if (impl.options.seamContinuityWeight != 0.0)
+    throw InvalidInputError(
+        "screenedSystemInFloat: the operators have a seam-continuity weight, whose C may add "
+        "entries to the pattern; use screenedSystem");
+  if (!impl.deferred) {  // assembled already: A in double first (M's storage), then rounded
+    std::vector<uint8_t> exact = impl.exactUnknowns();
+    return roundedSystem(screenedSystem(std::move(operators), alpha, visit, progress), exact);
+  }
+  FloatSystem out;
+  impl.assembleScreened(alpha, visit, progress, &out);
+  // M's index arrays become the system's (a swap keeps them where they are); its values were
+  // never used.
+  auto pattern = std::make_shared<SparseMatrixd>();
+  pattern->swap(impl.mass);
+  out.keepPatternAlive(std::move(pattern));
+  return out;
+}
+
+FloatSystem roundedSystem(SparseMatrixd&& a, std::span<const uint8_t> exactUnknown) {
+  if (!a.isCompressed() || a.rows() != a.cols())
+    throw InvalidInputError("roundedSystem: the matrix must be square and compressed");
+  auto pattern = std::make_shared<SparseMatrixd>();
+  pattern->swap(a);
+  const auto n = static_cast<int>(pattern->rows());
+  const int* outer = pattern->outerIndexPtr();
+  const double* values = pattern->valuePtr();
+  FloatSystem out(n, pattern->outerIndexPtr(), pattern->innerIndexPtr(), exactUnknown);
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
+    for (int u = r.begin(); u != r.end(); ++u) {
+      double sum = 0.0;  // in column order, as screenedSystemInFloat and the multigrid sum
+      for (int k = outer[u]; k < outer[u + 1]; ++k) {
+        out.set(k, values[k]);
+        sum += values[k];
+      }
+      out.setRowSum(u, sum);
+    }
+  });
+  detail::discardWholePages(pattern->valuePtr(),
+                            static_cast<size_t>(pattern->nonZeros()) * sizeof(double));
+  out.keepPatternAlive(std::move(pattern));
+  return out;
+}
+
+std::vector<uint8_t> TexelOperators::Impl::exactUnknowns() const {
+  const TexelGrid& grid = basis.grid();
+  if (grid.texelClass.empty())
+    throw InvalidInputError(
+        "screenedSystemInFloat: the grid's texel classes were freed "
+        "(TexelDomain::releaseImageMaps); free them after it");
+  const int* outer = mass.outerIndexPtr();
+  const int* inner = mass.innerIndexPtr();
+  std::vector<uint8_t> exact(static_cast<size_t>(grid.unknownCount()), 0);
+  tbb::parallel_for(tbb::blocked_range<int>(0, grid.unknownCount(), 4096),
+                    [&](const tbb::blocked_range<int>& r) {
+    for (int u = r.begin(); u != r.end(); ++u) {
+      const int32_t t = grid.texelOfUnknown[static_cast<size_t>(u)];
+      bool irregular = grid.texelClass[static_cast<size_t>(t)] != TexelClass::Interior;
+      // A seam piece's entries may reach beyond the 3 x 3 lattice neighbours.
+      for (int e = outer[u]; e < outer[u + 1] && !irregular; ++e) {
+        const int32_t other = grid.texelOfUnknown[static_cast<size_t>(inner[e])];
+        irregular = std::abs(other % grid.nx - t % grid.nx) > 1 ||
+                    std::abs(other / grid.nx - t / grid.nx) > 1;
+      }
+      exact[static_cast<size_t>(u)] = irregular ? 1 : 0;
+    }
+  });
+  return exact;
+}
+
+std::vector<uint8_t> TexelOperators::exactUnknowns() const {
+  return impl_->exactUnknowns();
 }
 
 SparseMatrixd screenedSystem(MassStiffness&& matrices, double alpha) {

@@ -115,8 +115,15 @@ struct TexelOperators::Impl {
   void prepareStreamed(std::vector<Eigen::Matrix2d> metric, const ProgressCallback& progress);
   /// The deferred assembly (OperatorOptions::deferAssembly): windows in turn, each column of S
   /// held only until complete; `visit` sees every column of M and S, which then becomes
-  /// alpha M + S in M's values (band_streaming.cpp).
-  void assembleScreened(double alpha, const ColumnVisitor& visit, const ProgressCallback& progress);
+  /// alpha M + S in M's values, or with `out` (on M's pattern) in `out`, with its row sums:
+  /// then M's values too are held only until their column is complete, and M's value array is
+  /// never touched (band_streaming.cpp).
+  void assembleScreened(double alpha, const ColumnVisitor& visit, const ProgressCallback& progress,
+                        FloatSystem* out = nullptr);
+  /// Per unknown: 1 for those whose entries a FloatSystem keeps exact, the texels whose footprint
+  /// is not inside one chart (TexelClass::Boundary) and those with seam pieces (rows that are
+  /// not a regular 3 x 3 stencil); the multigrid solves their rows directly.
+  std::vector<uint8_t> exactUnknowns() const;
   /// Bands each face's plain pieces meet, first[f] to last[f] (none if last[f] < 0).
   struct FaceBands {
     std::vector<int32_t> first, last;
@@ -152,13 +159,15 @@ struct TexelOperators::Impl {
                           int bandCount, StreamPlan& plan);
   /// Room for S's values of `columns` (ascending) on `pattern`, all zero.
   static ColumnValues columnValuesOf(const SparseMatrixd& pattern, std::vector<int32_t> columns);
-  /// Clips window k's faces again and adds their plain pieces into M's values (`massOut`, at
-  /// the pattern's positions) and S's (`stiffnessOut`, positions from `stiffnessFirst` on).
-  void assembleWindow(int k, double* massOut, double* stiffnessOut, int64_t stiffnessFirst);
+  /// Clips window k's faces again and adds their plain pieces into M's values (`massOut`,
+  /// positions from `massFirst` on) and S's (`stiffnessOut`, positions from `stiffnessFirst` on).
+  void assembleWindow(int k, double* massOut, int64_t massFirst, double* stiffnessOut,
+                      int64_t stiffnessFirst);
   /// Clips the plan's seam faces again, integrates their seam pieces and adds them into M and S
-  /// (S into `stiffnessColumns` instead, if given) in face order, a few chunks of faces in
-  /// flight (band_streaming.cpp).
-  void assembleSeamFaces(double* massOut, double* stiffnessOut, ColumnValues* stiffnessColumns);
+  /// (M into `massColumns`, S into `stiffnessColumns` instead, where given) in face order, a few
+  /// chunks of faces in flight (band_streaming.cpp).
+  void assembleSeamFaces(double* massOut, double* stiffnessOut, ColumnValues* stiffnessColumns,
+                         ColumnValues* massColumns = nullptr);
   /// C of the soft seam-continuity energy for the bilinear basis (none for the seam-continuous
   /// basis).
   void buildSeamContinuity();
@@ -176,17 +185,19 @@ struct TexelOperators::Impl {
                 double* stiffnessValues) const;
   /// Adds the plain pieces into M's and S_beta's values: bands of one colour (parity) at a time,
   /// even first, in parallel (two bands of a colour share no column).
-  /// S's values start at position `stiffnessFirst` of the pattern (0: all of them).
+  /// M's and S's values start at positions `massFirst` and `stiffnessFirst` of the pattern (0:
+  /// all of them).
   void assembleBands(const PlainPieces& pieces, const std::vector<FaceFactors>& faceFactors,
                      const double* beta, double* massValues, double* stiffnessValues,
-                     int64_t stiffnessFirst = 0) const;
+                     int64_t stiffnessFirst = 0, int64_t massFirst = 0) const;
   /// Adds seam pieces (in order; their texels and integrals at texelBegin and valueBegin of
-  /// `texels` and `values`) into M's and S_beta's values (S's into `stiffnessColumns` instead,
-  /// if given).
+  /// `texels` and `values`) into M's and S_beta's values (M's into `massColumns`, S's into
+  /// `stiffnessColumns` instead, where given).
   void assembleSeams(std::span<const SeamPiece> pieces, const int32_t* texels, const double* values,
                      const std::vector<FaceFactors>& faceFactors, const double* beta,
                      double* massValues, double* stiffnessValues,
-                     ColumnValues* stiffnessColumns = nullptr) const;
+                     ColumnValues* stiffnessColumns = nullptr,
+                     ColumnValues* massColumns = nullptr) const;
   /// Sets S's diagonal to minus the sum of the rest of its column (S 1 = 0; zeroColumnSums).
   void finishStiffness(double* stiffnessValues) const;
   /// Frees the piece integrals (OperatorOptions::keepPieceIntegrals = false).

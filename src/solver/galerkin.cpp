@@ -193,6 +193,11 @@ Sparse galerkinProduct(const SparseSum& a, const Sparse& p) {
 
 Sparse galerkinProduct(const SparseSum& a, const GridLevel& fine, const GridLevel& coarse) {
   requireSquare(a, fine.unknownCount());
+  if (fine.unknownOfSlot.size() != static_cast<size_t>(fine.slotCount) ||
+      coarse.unknownOfSlot.size() != static_cast<size_t>(coarse.slotCount))
+    throw InvalidInputError(
+        "Galerkin product: the levels' unknownOfSlot was freed (a MultigridSolver's hierarchy "
+        "frees it after a set-up); call GridHierarchy::restoreUnknownOfSlot first");
   return latticeProduct(fine, coarse, rowsOf(a));
 }
 

@@ -123,7 +123,17 @@ GridLevel buildCoarseLevel(const GridLevel& fine) {
   return coarse;
 }
 
-Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridLevel& coarse) {
+/// The inverse of level.slotOfUnknown: per slot, its unknown or -1.
+std::vector<int32_t> unknownsOfSlots(const GridLevel& level) {
+  std::vector<int32_t> inverse(static_cast<size_t>(level.slotCount), -1);
+  for (int u = 0; u < level.unknownCount(); ++u)
+    inverse[static_cast<size_t>(level.slotOfUnknown[static_cast<size_t>(u)])] = u;
+  return inverse;
+}
+
+/// P from `coarse` (whose unknown at each slot is unknownOfCoarseSlot) to `fine`.
+Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridLevel& coarse,
+                                              const std::vector<int32_t>& unknownOfCoarseSlot) {
   // Row-major first: every fine row has at most four parents, known in advance; the column-major
   // copy at the end is one linear pass (setFromTriplets would sort millions of entries).
   using RowMajor = Eigen::SparseMatrix<double, Eigen::RowMajor>;
@@ -147,7 +157,7 @@ Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridL
         for (int i = 0; i < px.count; ++i, ++k) {
           const int64_t slot =
               box.slot(px.index[static_cast<size_t>(i)], py.index[static_cast<size_t>(j)]);
-          rows.innerIndexPtr()[k] = coarse.unknownOfSlot[static_cast<size_t>(slot)];
+          rows.innerIndexPtr()[k] = unknownOfCoarseSlot[static_cast<size_t>(slot)];
           rows.valuePtr()[k] =
               px.weight[static_cast<size_t>(i)] * py.weight[static_cast<size_t>(j)];
         }
@@ -202,7 +212,19 @@ Eigen::SparseMatrix<double> GridHierarchy::prolongation(int l) const {
   if (l < 0 || l + 1 >= levelCount())
     throw InvalidInputError("GridHierarchy::prolongation: level " + std::to_string(l) +
                             " has no coarser level (levels: " + std::to_string(levelCount()) + ")");
-  return buildProlongation(level(l), level(l + 1));
+  const GridLevel& coarse = level(l + 1);
+  if (!coarse.unknownOfSlot.empty())
+    return buildProlongation(level(l), coarse, coarse.unknownOfSlot);
+  return buildProlongation(level(l), coarse, unknownsOfSlots(coarse));
+}
+
+void GridHierarchy::releaseUnknownOfSlot() {
+  for (GridLevel& g : levels_) std::vector<int32_t>().swap(g.unknownOfSlot);
+}
+
+void GridHierarchy::restoreUnknownOfSlot() {
+  for (GridLevel& g : levels_)
+    if (g.unknownOfSlot.empty() && g.slotCount > 0) g.unknownOfSlot = unknownsOfSlots(g);
 }
 
 int64_t GridHierarchy::storageBytes() const {

@@ -281,7 +281,8 @@ void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRow
   if (system.boundaryCount() > 0) system.boundarySolver.analyzePattern(bb);
 }
 
-void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system) {
+void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system,
+                    std::span<const float> rowSums) {
   // Counted first so every array is allocated once at its exact size, then filled on all cores.
   const int nb = system.boundaryCount();
   SlotCsr& rows = system.boundaryRows;
@@ -300,12 +301,24 @@ void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& sys
     const int u = unknownOfBoundary(level, system, j);
     int64_t off = rows.ptr[sj], on = off + system.offBlockEnd[sj];
     system.offBlockEnd[sj] = on;
+    int64_t diagonal = -1;  // where the row's diagonal goes in rows.val
+    bool roundedDiagonal = false;
+    double others = 0.0;
     for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
-      const size_t row = static_cast<size_t>(a.inner()[e]);
-      int64_t& out = system.boundaryIndex.contains(static_cast<int>(row)) ? on : off;
-      rows.col[static_cast<size_t>(out)] = level.slotOfUnknown[row];
+      const int row = a.inner()[e];
+      int64_t& out = system.boundaryIndex.contains(row) ? on : off;
+      if (row == u) {
+        diagonal = out;
+        roundedDiagonal = a.rounded(e);
+      } else {
+        others += a.value(e);
+      }
+      rows.col[static_cast<size_t>(out)] = level.slotOfUnknown[static_cast<size_t>(row)];
       rows.val[static_cast<size_t>(out++)] = a.value(e);
     }
+    if (!rowSums.empty() && roundedDiagonal)
+      rows.val[static_cast<size_t>(diagonal)] =
+          static_cast<double>(rowSums[static_cast<size_t>(u)]) - others;
   });
   assignInteriorNextToBoundary(level, a, system);
 }

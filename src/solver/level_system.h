@@ -129,8 +129,14 @@ bool rowIsStencil(const GridLevel& level, const SparseSum& pattern, int u);
 void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRowReach,
                    LevelSystem& system);
 
-/// Numeric phase for the boundary: fills boundaryRows / offBlockEnd.
-void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system);
+/// Numeric phase for the boundary: fills boundaryRows / offBlockEnd. With `rowSums` (per
+/// unknown: the sums of A's rows before its entries were rounded, a FloatSystem's), each boundary
+/// row whose diagonal `a` holds rounded (SparseSum::rounded) gets its row sum minus its other
+/// entries as its diagonal, so the row keeps its sum as the difference form of the interior rows
+/// does: rounding the entries then perturbs A only by a matrix with zero row sums (see
+/// galerkinFromLevel).
+void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& system,
+                    std::span<const float> rowSums = {});
 
 /// Factorises A_bb^l (system.boundarySolver) from the assigned boundary rows, so that a caller
 /// can release A first and a handed-over A^0 never coexists with CHOLMOD's copy of the block and

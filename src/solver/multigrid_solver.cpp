@@ -65,6 +65,28 @@ int64_t sparseBytes(const Eigen::SparseMatrix<double>& a) {
          (a.outerSize() > 0 ? a.outerSize() + 1 : 0) * int64_t(sizeof(int));
 }
 
+/// A^0 handed over to a set-up (initAndUpdate or update on an rvalue), as a double matrix or a
+/// FloatSystem: the walk owns it, drops its pages as level 0's stencils read it and frees it
+/// once level 0 is set up.
+struct HandedOver {
+  Eigen::SparseMatrix<double>* matrix = nullptr;
+  FloatSystem* compact = nullptr;
+  explicit operator bool() const { return matrix != nullptr || compact != nullptr; }
+  /// Bytes of A^0's arrays.
+  int64_t bytes() const {
+    return matrix ? sparseBytes(*matrix) : compact ? compact->storageBytes() : 0;
+  }
+  /// A^0's row sums per unknown if it carries them (a FloatSystem), else empty.
+  std::span<const float> rowSums() const {
+    return compact ? compact->rowSums() : std::span<const float>();
+  }
+  /// Frees A^0.
+  void free() const {
+    if (matrix) Eigen::SparseMatrix<double>().swap(*matrix);
+    if (compact) *compact = FloatSystem();
+  }
+};
+
 using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point start) {
@@ -217,7 +239,16 @@ struct MultigridSolver<Scalar>::Impl {
   /// The symbolic phase alone has no level-0 data and forms A^1 from A^0's pattern: the same
   /// pattern (galerkinFromLevel).
   void walkLevels(const SparseSum& a0, bool symbolicPhase, bool numericPhase,
-                  Eigen::SparseMatrix<double>* handedOver = nullptr) {
+                  HandedOver handedOver = {}) {
+    // Only a set-up reads unknownOfSlot: rebuilt for it, freed after (8 B/t at spot 4096²).
+    hierarchy.restoreUnknownOfSlot();
+    walkLevelsWithUnknownOfSlot(a0, symbolicPhase, numericPhase, handedOver);
+    hierarchy.releaseUnknownOfSlot();
+  }
+
+  /// walkLevels, with every level's unknownOfSlot there.
+  void walkLevelsWithUnknownOfSlot(const SparseSum& a0, bool symbolicPhase, bool numericPhase,
+                                   HandedOver handedOver) {
     if (symbolicPhase) {
       levels.clear();
       levels.resize(static_cast<size_t>(hierarchy.levelCount()));
@@ -264,7 +295,8 @@ struct MultigridSolver<Scalar>::Impl {
         if (symbolicPhase)
           detail::classifyLevel(grid, a, l == 0 ? options.weakRowReach : 0, lv.sys);
         if (numericPhase) {
-          detail::assignBoundary(grid, a, lv.sys);
+          detail::assignBoundary(grid, a, lv.sys,
+                                 l == 0 ? handedOver.rowSums() : std::span<const float>());
           if (!factoriseLast) detail::factoriseBoundary(grid, lv.sys);
           detail::assignLines<T>(grid, a, lv.sys, options.lineRatio, lv.lines, lv.lineCoeffs);
         }
@@ -274,28 +306,33 @@ struct MultigridSolver<Scalar>::Impl {
           // resident as A^0 stops being.
           const bool release = fromLevelData && handedOver;
           std::function<void(int)> consumed;
-          if (l == 0) consumed = rowSummer(grid, a, release ? releaser(*handedOver) : nullptr);
+          if (l == 0)
+            consumed = rowSummer(grid, a, handedOver.rowSums(),
+                                 release ? releaser(handedOver) : nullptr);
           detail::assignStencils<T>(grid, a, lv.sys, lv.stencil, release, consumed);
         }
       }
       if (l == coarsest()) {
         // A one-level hierarchy is solved directly: only then is A^0 formed (unless handed over).
+        // A FloatSystem's diagonals come from its row sums, as its boundary rows' do.
         const Eigen::SparseMatrix<double> formed =
-            l == 0 && !handedOver ? a0.toMatrix() : Eigen::SparseMatrix<double>();
+            l == 0 && !handedOver.matrix
+                ? (handedOver.compact ? formedMatrix(*handedOver.compact) : a0.toMatrix())
+                : Eigen::SparseMatrix<double>();
         const Eigen::SparseMatrix<double>& direct =
-            l > 0 ? coarse : (handedOver ? *handedOver : formed);
+            l > 0 ? coarse : (handedOver.matrix ? *handedOver.matrix : formed);
         if (symbolicPhase) coarseSolver.analyzePattern(direct);
         if (numericPhase) coarseSolver.factorize(direct);
         heldMatrixBytes[sl] = sparseBytes(formed);
       }
       // The matrices held with level l's data: A^l (A^0 only if handed over) and A^{l+1}; at
       // level 0 from its data, a handed-over A^0 and then A^1, never both.
-      const int64_t handedBytes = l == 0 && handedOver ? sparseBytes(*handedOver) : 0;
+      const int64_t handedBytes = l == 0 ? handedOver.bytes() : 0;
       // Before A^0 is freed, though its pages are gone: CHOLMOD's blocks then do not settle in
       // the hole it leaves, which the next matrix formed (reaction-diffusion's second species)
       // fills whole.
       if (numericPhase && split && factoriseLast) detail::factoriseBoundary(grid, lv.sys);
-      if (l == 0 && handedOver) Eigen::SparseMatrix<double>().swap(*handedOver);  // A^0
+      if (l == 0) handedOver.free();  // A^0
       if (fromLevelData) {
         Eigen::SparseMatrix<double> formed =
             detail::galerkinFromLevel(grid, lv.sys, std::span<const T>(lv.stencil.data(),
@@ -318,40 +355,52 @@ struct MultigridSolver<Scalar>::Impl {
   /// columns the stencils have read (its last reader), so that A^0 shrinks as level 0's
   /// stencils grow instead of both being whole at once (docs/memory.md). The matrix is freed
   /// after, never read again: released pages only stop being resident.
-  static std::function<void(int)> releaser(Eigen::SparseMatrix<double>& a) {
+  static std::function<void(int)> releaser(HandedOver a) {
     // Each time from the arrays' start: a page across the previous end goes too (pages that
     // are gone already cost the kernel nothing).
-    return [&a](int u) {
-      const auto end = static_cast<size_t>(a.outerIndexPtr()[u]);
-      detail::discardWholePages(a.valuePtr(), end * sizeof(double));
-      detail::discardWholePages(a.innerIndexPtr(), end * sizeof(int));
+    return [a](int u) {
+      if (a.compact) {
+        a.compact->discardColumnsBefore(u);
+        return;
+      }
+      const auto end = static_cast<size_t>(a.matrix->outerIndexPtr()[u]);
+      detail::discardWholePages(a.matrix->valuePtr(), end * sizeof(double));
+      detail::discardWholePages(a.matrix->innerIndexPtr(), end * sizeof(int));
     };
   }
 
   /// For assignStencils at level 0: a callback that, given u, sums the rows before u not summed
-  /// yet (sumRows), then passes u on to `then` if given. rowSums is allocated first (zeros), on
-  /// pages of its own if `then` releases A^0. Only interior rows' sums are used (the difference
-  /// form of the interior rows), and every interior row lies in a band.
+  /// yet (sumRows; or takes their sums from `given`, per unknown, if not empty), then passes u
+  /// on to `then` if given. rowSums is allocated first (zeros), on pages of its own if `then`
+  /// releases A^0. Only interior rows' sums are used (the difference form of the interior
+  /// rows), and every interior row lies in a band.
   std::function<void(int)> rowSummer(const GridLevel& grid, const SparseSum& a,
+                                     std::span<const float> given,
                                      std::function<void(int)> then) {
     if (rowSums.size() != static_cast<size_t>(grid.slotCount))
       rowSums = PageArray<T>::zeros(static_cast<size_t>(grid.slotCount), static_cast<bool>(then));
-    return [this, &grid, &a, then = std::move(then), done = 0](int end) mutable {
+    return [this, &grid, &a, given, then = std::move(then), done = 0](int end) mutable {
       if (end > done) {
-        sumRows(grid, a, done, end);
+        sumRows(grid, a, given, done, end);
         done = end;
       }
       if (then) then(end);
     };
   }
 
-  /// rowSums at unknowns [begin, end) of level 0 (columns of the symmetric A: its rows).
-  void sumRows(const GridLevel& grid, const SparseSum& a, int begin, int end) {
+  /// rowSums at unknowns [begin, end) of level 0 (columns of the symmetric A: its rows), or
+  /// their `given` sums if not empty.
+  void sumRows(const GridLevel& grid, const SparseSum& a, std::span<const float> given, int begin,
+               int end) {
     tbb::parallel_for(tbb::blocked_range<int>(begin, end, 4096),
                       [&](const tbb::blocked_range<int>& range) {
                         for (int u = range.begin(); u != range.end(); ++u) {
                           double sum = 0.0;
-                          for (int e = a.outer()[u]; e < a.outer()[u + 1]; ++e) sum += a.value(e);
+                          if (!given.empty())
+                            sum = given[static_cast<size_t>(u)];
+                          else
+                            for (int e = a.outer()[u]; e < a.outer()[u + 1]; ++e)
+                              sum += a.value(e);
                           rowSums.data()[grid.slotOfUnknown[static_cast<size_t>(u)]] =
                               static_cast<T>(sum);
                         }
@@ -372,8 +421,7 @@ struct MultigridSolver<Scalar>::Impl {
     stats.initSeconds += secondsSince(start);
   }
 
-  void symbolic(const SparseSum& pattern, bool numericToo,
-                Eigen::SparseMatrix<double>* handedOver = nullptr) {
+  void symbolic(const SparseSum& pattern, bool numericToo, HandedOver handedOver = {}) {
     const auto start = Clock::now();
     walkLevels(pattern, true, numericToo, handedOver);
     initialised = true;
@@ -389,7 +437,7 @@ struct MultigridSolver<Scalar>::Impl {
     refreshCounters();
   }
 
-  void numeric(const SparseSum& a0, Eigen::SparseMatrix<double>* handedOver = nullptr) {
+  void numeric(const SparseSum& a0, HandedOver handedOver = {}) {
     if (!initialised) throw InvalidInputError("MultigridSolver::update called before init");
     const auto start = Clock::now();
     walkLevels(a0, false, true, handedOver);
@@ -641,7 +689,15 @@ void MultigridSolver<Scalar>::initAndUpdate(Eigen::SparseMatrix<double>&& a) {
   Eigen::SparseMatrix<double> owned;  // swapped: Eigen 3.4's SparseMatrix cannot be moved
   owned.swap(a);
   const SparseSum view(owned);  // throws (a already empty) if `owned` is not compressed
-  impl_->arena.execute([&] { impl_->symbolic(view, true, &owned); });
+  impl_->arena.execute([&] { impl_->symbolic(view, true, HandedOver{&owned, nullptr}); });
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::initAndUpdate(FloatSystem&& a) {
+  impl_->requireHierarchy("initAndUpdate");
+  FloatSystem owned = std::move(a);
+  const SparseSum view(owned);
+  impl_->arena.execute([&] { impl_->symbolic(view, true, HandedOver{nullptr, &owned}); });
 }
 
 template <typename Scalar>
@@ -654,7 +710,14 @@ void MultigridSolver<Scalar>::update(Eigen::SparseMatrix<double>&& a) {
   Eigen::SparseMatrix<double> owned;
   owned.swap(a);
   const SparseSum view(owned);
-  impl_->arena.execute([&] { impl_->numeric(view, &owned); });
+  impl_->arena.execute([&] { impl_->numeric(view, HandedOver{&owned, nullptr}); });
+}
+
+template <typename Scalar>
+void MultigridSolver<Scalar>::update(FloatSystem&& a) {
+  FloatSystem owned = std::move(a);
+  const SparseSum view(owned);
+  impl_->arena.execute([&] { impl_->numeric(view, HandedOver{nullptr, &owned}); });
 }
 
 template <typename Scalar>

@@ -3,7 +3,9 @@
 // bits in M, S and C, on procedural meshes at sizes that put window borders in many places, with
 // one thread and with all, and on the shared meshes. Likewise a deferred assembly
 // (deferAssembly: S held a column at a time until complete) against operators assembled first:
-// the same columns of M and S shown to the visitor, each once, and the same alpha M + S.
+// the same columns of M and S shown to the visitor, each once, and the same alpha M + S; and
+// alpha M + S in float (screenedSystemInFloat, roundedSystem): the double one rounded, with the
+// irregular rows exact and every row's sum.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
@@ -125,6 +127,110 @@ void expectDeferredMatchesAssembled(const TexturedMesh& mesh, int resolution,
     EXPECT_TRUE(identical(system, assembled.screenedSystem(kAlpha)))
         << "deferred " << built.deferAssembly;
   }
+}
+
+/// Expects `f` to be `a` (symmetric, compressed) rounded: the same pattern, every entry in the
+/// row or column of an exact unknown exactly a's and the others a's rounded to float, each row's
+/// sum a's entries summed in column order in double and rounded.
+void expectRounded(const FloatSystem& f, const SparseMatrixd& a, const std::vector<uint8_t>& exact,
+                   const std::string& what) {
+  SCOPED_TRACE(what);
+  ASSERT_EQ(f.rows(), a.rows());
+  ASSERT_EQ(f.nonZeros(), a.nonZeros());
+  ASSERT_TRUE(std::equal(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1, f.outer()));
+  ASSERT_TRUE(std::equal(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros(), f.inner()));
+  int64_t wrongValues = 0, wrongMarks = 0, wrongSums = 0;
+  for (int u = 0; u < a.outerSize(); ++u) {
+    double sum = 0.0;
+    for (int e = a.outerIndexPtr()[u]; e < a.outerIndexPtr()[u + 1]; ++e) {
+      const double v = a.valuePtr()[e];
+      const bool marked = exact[static_cast<size_t>(u)] || exact[a.innerIndexPtr()[e]];
+      wrongMarks += f.exact(e) != marked;
+      const double expected = marked ? v : static_cast<double>(static_cast<float>(v));
+      const double got = f.value(e);
+      wrongValues += std::memcmp(&got, &expected, sizeof(double)) != 0;
+      sum += v;
+    }
+    wrongSums += f.rowSums()[static_cast<size_t>(u)] != static_cast<float>(sum);
+  }
+  EXPECT_EQ(wrongMarks, 0);
+  EXPECT_EQ(wrongValues, 0);
+  EXPECT_EQ(wrongSums, 0);
+}
+
+/// Unknowns that are not exact are interior texels whose columns reach their 3 x 3 lattice
+/// neighbours only: the regular stencils a float multigrid rounds anyway.
+void expectInexactAreRegular(const TexelGrid& grid, const SparseMatrixd& pattern,
+                             const std::vector<uint8_t>& exact) {
+  ASSERT_EQ(exact.size(), static_cast<size_t>(grid.unknownCount()));
+  int irregular = 0, boundary = 0;
+  for (int u = 0; u < grid.unknownCount(); ++u) {
+    const int32_t t = grid.texelOfUnknown[static_cast<size_t>(u)];
+    boundary += grid.texelClass[static_cast<size_t>(t)] != TexelClass::Interior;
+    if (exact[static_cast<size_t>(u)]) continue;
+    bool regular = grid.texelClass[static_cast<size_t>(t)] == TexelClass::Interior;
+    for (int e = pattern.outerIndexPtr()[u]; e < pattern.outerIndexPtr()[u + 1]; ++e) {
+      const int32_t o = grid.texelOfUnknown[static_cast<size_t>(pattern.innerIndexPtr()[e])];
+      regular = regular && std::abs(o % grid.nx - t % grid.nx) <= 1 &&
+                std::abs(o / grid.nx - t / grid.nx) <= 1;
+    }
+    irregular += !regular;
+  }
+  EXPECT_EQ(irregular, 0);
+  EXPECT_GT(boundary, 0);
+  EXPECT_GE(std::count(exact.begin(), exact.end(), uint8_t{1}), boundary);
+}
+
+/// screenedSystemInFloat on `mesh`, deferred and assembled first, against screenedSystem: the
+/// visitor sees the same columns, and the system is the double one rounded (expectRounded), as
+/// roundedSystem gives it.
+void expectFloatSystemRoundsTheDoubleOne(const TexturedMesh& mesh, int resolution,
+                                         const OperatorOptions& options, const std::string& name) {
+  SCOPED_TRACE(name + " at " + std::to_string(resolution));
+  constexpr double kAlpha = 0.37;
+  const Atlas atlas = buildAtlas(mesh);
+  const TexelGrid grid = buildTexelGrid(mesh, atlas, resolution, resolution);
+  OperatorOptions once = options, deferral = options;
+  once.keepPieceIntegrals = deferral.keepPieceIntegrals = false;
+  deferral.deferAssembly = true;
+  const TexelOperators assembled(mesh, atlas, grid, once);
+  const std::vector<uint8_t> exact = assembled.exactUnknowns();
+  expectInexactAreRegular(grid, assembled.mass(), exact);
+  const SparseMatrixd reference = assembled.screenedSystem(kAlpha);
+  expectRounded(roundedSystem(assembled.screenedSystem(kAlpha), exact), reference, exact,
+                "roundedSystem");
+  for (const OperatorOptions& built : {deferral, once}) {
+    auto operators = std::make_unique<TexelOperators>(mesh, atlas, grid, built);
+    VisitedColumns seen(assembled.mass());
+    const FloatSystem f =
+        TexelOperators::screenedSystemInFloat(std::move(operators), kAlpha, seen.visitor());
+    EXPECT_EQ(seen.wrongVisits(), 0) << "deferred " << built.deferAssembly;
+    EXPECT_TRUE(identical(seen.mass, assembled.mass())) << "deferred " << built.deferAssembly;
+    EXPECT_TRUE(identical(seen.stiffness, assembled.stiffness()))
+        << "deferred " << built.deferAssembly;
+    expectRounded(f, reference, exact, built.deferAssembly ? "deferred" : "assembled first");
+  }
+}
+
+TEST(FloatAssembly, RoundsTheDoubleSystemKeepingIrregularRowsExactAndEveryRowSum) {
+  for (int resolution : {12, 61, 203})
+    expectFloatSystemRoundsTheDoubleOne(test::cubeSphere(4), resolution, {}, "sphere");
+  expectFloatSystemRoundsTheDoubleOne(test::twoChartSquare(3, 0.05), 96, {}, "twoChartDense");
+  expectFloatSystemRoundsTheDoubleOne(test::gridSquare(3, 0.9, 0.8, 0.031, 0.077), 160, {},
+                                      "square");
+  OperatorOptions small;
+  small.facesPerTask = 2;
+  expectFloatSystemRoundsTheDoubleOne(test::cubeSphere(4), 128, small, "sphere, 2 faces per task");
+  // A seam-continuity weight's C may add entries: refused.
+  OperatorOptions bilinear = OperatorOptions::assembledOnce();
+  bilinear.basis = fem::BasisKind::Bilinear;
+  bilinear.seamContinuityWeight = 0.5;
+  const TexturedMesh mesh = test::twoChartSquare(5);
+  const Atlas atlas = buildAtlas(mesh);
+  const TexelGrid grid = buildTexelGrid(mesh, atlas, 40, 40);
+  EXPECT_THROW(static_cast<void>(TexelOperators::screenedSystemInFloat(
+                   std::make_unique<TexelOperators>(mesh, atlas, grid, bilinear), 1.0, {})),
+               InvalidInputError);
 }
 
 TEST(StreamedAssembly, MatchesTheKeptPiecesBitForBit) {

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include "synthetic_problem.h"
+#include "texgrad/core/error.h"
+#include "texgrad/solver/galerkin.h"
 #include "texgrad/solver/grid_hierarchy.h"
 
 using namespace texgrad;
@@ -63,4 +65,26 @@ TEST(GridHierarchy, StopsCoarseningTinyCharts) {
   const GridHierarchy h = GridHierarchy::build(p.grid, 8, 16);
   EXPECT_LT(h.levelCount(), 9);
   EXPECT_GE(h.level(h.levelCount() - 1).unknownCount(), 1);
+}
+
+TEST(GridHierarchy, UnknownOfSlotFreedIsRebuiltAsBuiltAndProlongationsDoWithoutIt) {
+  const test::SyntheticProblem p = test::multiChartProblem(16);
+  const GridHierarchy built = GridHierarchy::build(p.grid, 4, 16);
+  GridHierarchy h = built;
+  const int64_t whole = h.storageBytes();
+  h.releaseUnknownOfSlot();
+  EXPECT_LT(h.storageBytes(), whole);
+  for (int l = 0; l < h.levelCount(); ++l) {
+    EXPECT_TRUE(h.level(l).unknownOfSlot.empty()) << "level " << l;
+    if (l + 1 < h.levelCount())
+      EXPECT_EQ((h.prolongation(l) - built.prolongation(l)).norm(), 0.0) << "level " << l;
+  }
+  const Eigen::SparseMatrix<double> a = p.system(1.0);
+  EXPECT_THROW(galerkinProduct(a, h.level(0), h.level(1)), InvalidInputError);
+  h.restoreUnknownOfSlot();
+  for (int l = 0; l < h.levelCount(); ++l)
+    EXPECT_EQ(h.level(l).unknownOfSlot, built.level(l).unknownOfSlot) << "level " << l;
+  EXPECT_EQ((galerkinProduct(a, h.level(0), h.level(1)) -
+             galerkinProduct(a, built.level(0), built.level(1))).norm(), 0.0);
+  EXPECT_EQ(h.storageBytes(), whole);
 }

@@ -5,11 +5,13 @@
 #include <cmath>
 
 #include <cstdio>
+#include <memory>
 #include <sstream>
 #include <vector>
 
 #include "synthetic_problem.h"
 #include "texgrad/core/error.h"
+#include "texgrad/core/float_system.h"
 #include "texgrad/solver/cholmod_solver.h"
 #include "texgrad/solver/multigrid_solver.h"
 
@@ -212,6 +214,73 @@ TEST(Multigrid, HandedOverMatrixGivesTheSameCyclesAndIsFreedWithLevelZero) {
       EXPECT_EQ(seen[l].setUpMatrixBytes, own + next) << "level " << l;
       EXPECT_EQ(info[l].setUpMatrixBytes, l == 0 ? std::max(a0, next) : own + next)
           << "level " << l;
+    }
+  }
+}
+
+/// `a` (symmetric, compressed) as a FloatSystem whose entries are all exact (exact = 1) or all
+/// rounded, with its row sums.
+FloatSystem floatSystemOf(const Eigen::SparseMatrix<double>& a, uint8_t exact) {
+  auto pattern = std::make_shared<Eigen::SparseMatrix<double>>(a);
+  const auto n = static_cast<int>(a.rows());
+  FloatSystem f(n, pattern->outerIndexPtr(), pattern->innerIndexPtr(),
+                std::vector<uint8_t>(static_cast<size_t>(n), exact));
+  for (int u = 0; u < n; ++u) {
+    double sum = 0.0;
+    for (int e = a.outerIndexPtr()[u]; e < a.outerIndexPtr()[u + 1]; ++e) {
+      f.set(e, a.valuePtr()[e]);
+      sum += a.valuePtr()[e];
+    }
+    f.setRowSum(u, sum);
+  }
+  f.keepPatternAlive(pattern);
+  return f;
+}
+
+TEST(Multigrid, AFloatSystemHandedOverGivesTheCyclesOfItsEntries) {
+  // All entries exact: the same cycles and level-0 operator as the double A handed over, bit
+  // for bit, with one level or several, for initAndUpdate and update; the system is taken over
+  // and every level's unknownOfSlot is freed after the set-up. All rounded: the interior
+  // stencils and row sums are the same, so the cycles stay close.
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  const Eigen::MatrixXd b = test::randomBlock(p.mass.rows(), 2, 7);
+  using Matrix = MultigridSolver<float>::Matrix;
+  for (const int minCoarse : {16, static_cast<int>(p.mass.rows()) + 1}) {
+    MultigridOptions o;
+    o.minCoarseUnknowns = minCoarse;
+    MultigridSolver<float> fromDouble(o), fromFloat(o), rounded(o);
+    for (double alpha : {1e3, 1e1}) {
+      const Eigen::SparseMatrix<double> a = p.system(alpha);
+      Eigen::SparseMatrix<double> given = a;
+      FloatSystem exact = floatSystemOf(a, 1), inexact = floatSystemOf(a, 0);
+      if (alpha == 1e3) {
+        fromDouble.initAndUpdate(p.grid, std::move(given));
+        fromFloat.buildHierarchy(p.grid);
+        fromFloat.initAndUpdate(std::move(exact));
+        rounded.buildHierarchy(p.grid);
+        rounded.initAndUpdate(std::move(inexact));
+      } else {
+        fromDouble.update(std::move(given));
+        fromFloat.update(std::move(exact));
+        rounded.update(std::move(inexact));
+      }
+      EXPECT_EQ(exact.rows(), 0);
+      EXPECT_EQ(exact.nonZeros(), 0);
+      Matrix x1 = Matrix::Zero(b.rows(), 2), x2 = x1, x3 = x1;
+      for (int k = 0; k < 2; ++k) {
+        fromDouble.cycle(b.cast<float>(), x1);
+        fromFloat.cycle(b.cast<float>(), x2);
+        rounded.cycle(b.cast<float>(), x3);
+      }
+      EXPECT_GT(x1.norm(), 0.0f);
+      EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0f) << "alpha " << alpha;
+      EXPECT_LT((x1 - x3).norm(), 1e-5f * x1.norm()) << "alpha " << alpha;
+      Matrix y1, y2;
+      fromDouble.applyOperator(x1, y1);
+      fromFloat.applyOperator(x1, y2);
+      EXPECT_EQ((y1 - y2).cwiseAbs().maxCoeff(), 0.0f) << "alpha " << alpha;
+      for (int l = 0; l < fromFloat.hierarchy().levelCount(); ++l)
+        EXPECT_TRUE(fromFloat.hierarchy().level(l).unknownOfSlot.empty()) << "level " << l;
     }
   }
 }

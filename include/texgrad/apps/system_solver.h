@@ -135,6 +135,20 @@ class SystemSolver {
   void initAndUpdate(const SparseSum& a, const ProgressCallback& progress = {});
   /// update on A read from a view, forming it only where initAndUpdate(const SparseSum&) does.
   void update(const SparseSum& a, const ProgressCallback& progress = {});
+  /// True if this solver takes A as a FloatSystem for what the unrounded A gives: float
+  /// multigrid cycles keeping no copy of A (see MatrixCopy), whose interior stencils and row sums
+  /// come out the same (MultigridSolver::initAndUpdate(FloatSystem&&)). A caller can then form A
+  /// in float only (TexelOperators::screenedSystemInFloat: 8 bytes per entry instead of 12).
+  bool takesFloatSystem() const;
+  /// takesFloatSystem() of a solver constructed with these settings and copy (before any change
+  /// to double cycles), for a caller that forms A before it builds the solver.
+  static bool takesFloatSystem(const SolverSettings& settings,
+                               MatrixCopy copy = MatrixCopy::WhenNeeded);
+  /// initAndUpdate on A as a FloatSystem, taken over (a is left empty): handed on to the
+  /// multigrid if takesFloatSystem(), else formed in double first (formedMatrix).
+  void initAndUpdate(FloatSystem&& a, const ProgressCallback& progress = {});
+  /// update on A as a FloatSystem, taken over as initAndUpdate(FloatSystem&&) takes it.
+  void update(FloatSystem&& a, const ProgressCallback& progress = {});
   /// Solves A X = B (n x k), using X as the initial guess for the iterative kinds. Reports stage
   /// "solve" to `progress` before every V-cycle or CG iteration (before and after the direct
   /// solve) and at the end, with the count done and the most the settings allow

@@ -12,6 +12,7 @@
 
 #include "texgrad/atlas/atlas.h"
 #include "texgrad/atlas/texel_grid.h"
+#include "texgrad/core/float_system.h"
 #include "texgrad/core/progress.h"
 #include "texgrad/fem/metric.h"
 #include "texgrad/fem/texel_basis.h"
@@ -153,6 +154,21 @@ class TexelOperators {
   static SparseMatrixd screenedSystem(std::unique_ptr<TexelOperators> operators, double alpha,
                                       const ColumnVisitor& visit,
                                       const ProgressCallback& progress = {});
+  /// screenedSystem(operators, alpha, visit, progress) as a FloatSystem: each entry of
+  /// alpha M + S rounded to float (and kept exact too in the rows and columns of
+  /// exactUnknowns()), each row's sum formed from the unrounded entries. A deferred
+  /// assembly then holds M's values, too, only until their column is complete, and neither M
+  /// nor A ever exists in double: about 8 bytes per entry instead of 12 (docs/memory.md). For float
+  /// multigrid cycles (SystemSolver::takesFloatSystem). Throws InvalidInputError as that
+  /// overload does, or if the operators have a seam-continuity weight (whose C may add entries).
+  static FloatSystem screenedSystemInFloat(std::unique_ptr<TexelOperators> operators,
+                                           double alpha, const ColumnVisitor& visit,
+                                           const ProgressCallback& progress = {});
+  /// Per unknown: 1 for those whose entries screenedSystemInFloat keeps exact (in double as
+  /// well as float), the texels that have no regular interior stencil: those whose footprint is
+  /// not inside one chart (TexelClass::Boundary) and those with seam pieces. Reads the grid's
+  /// texel classes.
+  std::vector<uint8_t> exactUnknowns() const;
   /// True while the assembly of operators built with OperatorOptions::deferAssembly has not
   /// run: mass(), stiffness(), seamContinuity() and the products formed from them throw
   /// InvalidInputError until then (the pattern, texelPairs() and differential() are there).
@@ -205,6 +221,12 @@ class TexelOperators {
 /// as TexelOperators::assembledFor returns them (throws InvalidInputError otherwise). Entry for
 /// entry the same values as the expression alpha * M + S.
 SparseMatrixd screenedSystem(MassStiffness&& matrices, double alpha);
+/// `a` (symmetric, compressed) as a FloatSystem on a's own pattern arrays: each entry rounded to
+/// float, those in the rows and columns of exactUnknown (one flag per unknown:
+/// TexelOperators::exactUnknowns) kept exact too, each row's sum of a's entries in column order
+/// rounded; a's double values are dropped. For a = screenedSystem(alpha), the same system as
+/// screenedSystemInFloat gives.
+FloatSystem roundedSystem(SparseMatrixd&& a, std::span<const uint8_t> exactUnknown);
 
 /// Builds M and S of a mesh/atlas/grid for the immersion metric of the unit-area surface.
 MassStiffness buildMassStiffness(const TexturedMesh& mesh, const Atlas& atlas,

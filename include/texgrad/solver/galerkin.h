@@ -18,7 +18,8 @@ Eigen::SparseMatrix<double> galerkinProduct(const SparseSum& a,
 /// Pᵀ A P for the bilinear prolongation P from `coarse` to `fine` (consecutive levels of one
 /// GridHierarchy), computed from the lattice positions without storing P; equal, bit for bit, to
 /// galerkinProduct(a, GridHierarchy::prolongation(l)). Throws InvalidInputError unless A is
-/// square with fine's unknown count (and, as a matrix, compressed).
+/// square with fine's unknown count (and, as a matrix, compressed) and both levels have their
+/// unknownOfSlot (GridHierarchy::restoreUnknownOfSlot).
 Eigen::SparseMatrix<double> galerkinProduct(const SparseSum& a, const GridLevel& fine,
                                             const GridLevel& coarse);
 

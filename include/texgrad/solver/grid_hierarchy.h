@@ -49,7 +49,9 @@ struct GridLevel {
   std::vector<GridBox> boxes;          ///< one box per chart present, in increasing offset
   std::vector<int32_t> boxOfChart;     ///< per chart: index into boxes, -1 if absent
   int64_t slotCount = 0;               ///< total slots over all boxes (< 2^31)
-  std::vector<int32_t> unknownOfSlot;  ///< per slot: unknown index or -1
+  /// Per slot: unknown index or -1 (the inverse of slotOfUnknown). Only a set-up reads it: a
+  /// MultigridSolver's hierarchy frees it after each set-up (GridHierarchy::releaseUnknownOfSlot).
+  std::vector<int32_t> unknownOfSlot;
   std::vector<int32_t> slotOfUnknown;  ///< per unknown: slot index
   /// Per unknown: footprint [-2^l, 2^l]^2 entirely made of Full cells of its chart (paper §6.1).
   std::vector<uint8_t> footprintInterior;
@@ -94,12 +96,18 @@ class GridHierarchy {
   /// Level l (0 = finest, the TexelGrid's unknowns).
   const GridLevel& level(int l) const { return levels_[static_cast<size_t>(l)]; }
   /// Prolongation P^l from level l + 1 to level l, n_l x n_{l+1}; R^l = (P^l)ᵀ. Built on
-  /// each call: the solver applies P from the lattice positions and never stores it.
+  /// each call (also after releaseUnknownOfSlot): the solver applies P from the lattice positions
+  /// and never stores it.
   Eigen::SparseMatrix<double> prolongation(int l) const;
   /// Number of charts (boxes at level 0 are indexed by chart).
   int chartCount() const { return chartCount_; }
   /// Bytes held by the levels' arrays (their capacity; docs/memory.md).
   int64_t storageBytes() const;
+  /// Frees every level's unknownOfSlot, which no V-cycle reads (4 bytes per slot: 8 per active
+  /// texel at spot 4096², docs/memory.md), for a solver done with its set-up.
+  void releaseUnknownOfSlot();
+  /// Rebuilds every freed unknownOfSlot from slotOfUnknown, for a set-up.
+  void restoreUnknownOfSlot();
 
  private:
   std::vector<GridLevel> levels_;

@@ -127,6 +127,14 @@ class MultigridSolver {
   void initAndUpdate(const SparseSum& a);
   /// initAndUpdate(grid, a&&) on the hierarchy already built, as initAndUpdate(a).
   void initAndUpdate(Eigen::SparseMatrix<double>&& a);
+  /// initAndUpdate(a&&) for A as a FloatSystem (entries in float, 8 bytes each where a double
+  /// matrix takes 12): the interior rows get the same float stencils and row sums as from the
+  /// unrounded A; the boundary rows' and a direct coarsest level's diagonals are set from the row
+  /// sums, so each row keeps its sum, as the difference form of the interior rows does. For
+  /// float cycles (double cycles would lose the entries' last bits).
+  void initAndUpdate(FloatSystem&& a);
+  /// update(a&&) for A as a FloatSystem (see initAndUpdate(FloatSystem&&)).
+  void update(FloatSystem&& a);
   /// One V-cycle (Fig. 8) improving x in place for right-hand side b (both n x k).
   void cycle(const Matrix& b, Matrix& x);
   /// V-cycles from the initial guess x until control is met; residual and change per cycle.

@@ -1,5 +1,6 @@
 // Solver module: a read-only view of a x X + y Y (+ Z) for sparse matrices of one pattern, so
-// that the screened systems alpha M + S (paper §5) reach the multigrid set-up without being formed.
+// that the screened systems alpha M + S (paper §5) reach the multigrid set-up without being formed;
+// or of a FloatSystem's entries.
 #pragma once
 
 #include <Eigen/SparseCore>
@@ -7,6 +8,8 @@
 #include <bit>
 #include <cstdint>
 #include <vector>
+
+#include "texgrad/core/float_system.h"
 
 namespace texgrad {
 
@@ -44,6 +47,10 @@ class SparseSum {
     addInPattern(z);
   }
 
+  /// View of a FloatSystem's entries (FloatSystem::value; its row sums are the system's own).
+  explicit SparseSum(const FloatSystem& a)
+      : rows_(a.rows()), outer_(a.outer()), inner_(a.inner()), floatSystem_(&a) {}
+
   /// Rows (= columns).
   Eigen::Index rows() const { return rows_; }
   /// Stored entries of the shared pattern.
@@ -54,6 +61,7 @@ class SparseSum {
   const int* inner() const { return inner_; }
   /// Value of entry e of the pattern.
   double value(Eigen::Index e) const {
+    if (floatSystem_) return floatSystem_->value(e);  // one matrix, no Z
     const double sum = y_ ? xScale_ * x_[e] + yScale_ * y_[e] : x_[e];
     if (marks_.empty()) return sum;
     const auto word = static_cast<size_t>(e / kWordBits);
@@ -63,6 +71,8 @@ class SparseSum {
     const uint64_t below = marks_[word] & ((uint64_t{1} << bit) - 1);
     return sum + addend_[rankBefore_[word] + static_cast<size_t>(std::popcount(below))];
   }
+  /// True if entry e is a FloatSystem's entry rounded to float (not one it keeps exact).
+  bool rounded(Eigen::Index e) const { return floatSystem_ && !floatSystem_->exact(e); }
   /// The sum as a matrix (for the direct solver of a one-level hierarchy).
   Eigen::SparseMatrix<double> toMatrix() const;
 
@@ -79,11 +89,17 @@ class SparseSum {
   const int* inner_ = nullptr;
   const double* x_ = nullptr;
   const double* y_ = nullptr;  ///< null for a single matrix
+  const FloatSystem* floatSystem_ = nullptr;  ///< the viewed FloatSystem (x_ and y_ null)
   static constexpr int kWordBits = 64;  ///< entries per word of marks_
   double xScale_ = 1.0, yScale_ = 0.0;
   std::vector<uint64_t> marks_;       ///< bit e: Z has entry e of the pattern (empty: no entry)
   std::vector<uint32_t> rankBefore_;  ///< per word of marks_: marked entries in the words before
   std::vector<double> addend_;        ///< Z's values, in pattern order
 };
+
+/// The matrix a FloatSystem holds, in double: its entries (FloatSystem::value), each rounded
+/// diagonal set to its row's sum minus the row's other entries (so each such row keeps its sum,
+/// as the multigrid's boundary rows do: MultigridSolver::initAndUpdate(FloatSystem&&)).
+Eigen::SparseMatrix<double> formedMatrix(const FloatSystem& a);
 
 }  // namespace texgrad
