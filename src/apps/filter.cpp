@@ -296,11 +296,18 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
     problem.barely = barelyBound(domain, ops, options);
     problem.rhs = screenedRightHandSide(ops, x0, options);
     // From here on only A is needed: formed in M's storage when the operators are ours, which
-    // frees S with them (`ops` is not used again).
+    // frees S with them (`ops` is not used again); rounded as screenColumnByColumn forms it
+    // where the solver takes that, so every filter solves one system.
+    const bool rounded = SystemSolver::takesFloatSystem(options.solver) &&
+                         ops.options().seamContinuityWeight == 0.0;
+    const std::vector<uint8_t> exact = rounded ? ops.exactUnknowns() : std::vector<uint8_t>();
     Eigen::SparseMatrix<double> system =
         owned ? TexelOperators::screenedSystem(std::move(owned), options.alpha)
               : ops.screenedSystem(options.alpha);
-    problem.system.swap(system);
+    if (rounded)
+      problem.floatSystem = roundedSystem(std::move(system), exact);
+    else
+      problem.system.swap(system);
   }
   if (mapsKept) mapsOwner->releaseImageMaps(TexelDomain::KeptMaps::ClassAndChart);
   const BarelyCoveredNeighbours& barely = problem.barely;
@@ -400,11 +407,11 @@ void InteractiveFilter::applyParameters(double alpha, double beta, std::vector<d
   // As the one-shot filter hands it over: rounded to float where the solver takes that, so
   // both solve the same system (roundedSystem gives screenedSystemInFloat's values and sums).
   if (solver_.takesFloatSystem() && ops.options().seamContinuityWeight == 0.0) {
+    if (exactUnknowns_.empty()) exactUnknowns_ = ops.exactUnknowns();
     if (first)
-      solver_.initAndUpdate(roundedSystem(ops.screenedSystem(alpha), ops.exactUnknowns()),
-                            progress);
+      solver_.initAndUpdate(roundedSystem(ops.screenedSystem(alpha), exactUnknowns_), progress);
     else
-      solver_.update(roundedSystem(ops.screenedSystem(alpha), ops.exactUnknowns()), progress);
+      solver_.update(roundedSystem(ops.screenedSystem(alpha), exactUnknowns_), progress);
   } else if (first) {
     solver_.initAndUpdate(ops.screenedSystem(alpha), progress);
   } else {

@@ -21,9 +21,8 @@ FloatSystem::FloatSystem(int rows, int* outer, int* inner, std::span<const uint8
   if (exactUnknown.size() != static_cast<size_t>(rows))
     throw InvalidInputError("FloatSystem: " + std::to_string(exactUnknown.size()) +
                             " exact-unknown flags for " + std::to_string(rows) + " rows");
+  // Fewer than 2^31 entries (int column starts), so their ranks fit marks_'s uint32 counts.
   const auto entries = static_cast<size_t>(nonZeros());
-  if (entries >= (size_t{1} << 32))
-    throw InvalidInputError("FloatSystem: more than 2^32 entries");
   values_.assign(entries, 0.0F);
   rowSums_.assign(static_cast<size_t>(rows), 0.0F);
   marks_.assign((entries + 63) / 64, 0);
@@ -49,6 +48,7 @@ FloatSystem::FloatSystem(int rows, int* outer, int* inner, std::span<const uint8
 }
 
 FloatSystem& FloatSystem::operator=(FloatSystem&& other) noexcept {
+  if (this == &other) return *this;
   rows_ = std::exchange(other.rows_, 0);
   outer_ = std::exchange(other.outer_, nullptr);
   inner_ = std::exchange(other.inner_, nullptr);

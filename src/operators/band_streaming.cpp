@@ -151,7 +151,10 @@ void TexelOperators::Impl::assembleScreened(double alpha, const ColumnVisitor& v
     detail::discardWholePages(mass.valuePtr(), nonZeros * sizeof(double));
     *out = FloatSystem(n, mass.outerIndexPtr(), mass.innerIndexPtr(), exactUnknowns());
   } else {
-    std::fill_n(massValues, nonZeros, 0.0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nonZeros, size_t{1} << 16),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                        std::fill(massValues + r.begin(), massValues + r.end(), 0.0);
+                      });
   }
   // Unknowns are numbered row by row: the first unknown in texel row y or above.
   auto firstUnknownOfRow = [&](int y) {

@@ -724,6 +724,10 @@ FloatSystem TexelOperators::screenedSystemInFloat(std::unique_ptr<TexelOperators
 FloatSystem roundedSystem(SparseMatrixd&& a, std::span<const uint8_t> exactUnknown) {
   if (!a.isCompressed() || a.rows() != a.cols())
     throw InvalidInputError("roundedSystem: the matrix must be square and compressed");
+  if (exactUnknown.size() != static_cast<size_t>(a.rows()))  // before a is taken over
+    throw InvalidInputError("roundedSystem: " + std::to_string(exactUnknown.size()) +
+                            " exact-unknown flags for a matrix of " + std::to_string(a.rows()) +
+                            " rows");
   auto pattern = std::make_shared<SparseMatrixd>();
   pattern->swap(a);
   const auto n = static_cast<int>(pattern->rows());
@@ -750,8 +754,8 @@ std::vector<uint8_t> TexelOperators::Impl::exactUnknowns() const {
   const TexelGrid& grid = basis.grid();
   if (grid.texelClass.empty())
     throw InvalidInputError(
-        "screenedSystemInFloat: the grid's texel classes were freed "
-        "(TexelDomain::releaseImageMaps); free them after it");
+        "exactUnknowns: the grid's texel classes were freed (TexelDomain::releaseImageMaps); "
+        "free them after it");
   const int* outer = mass.outerIndexPtr();
   const int* inner = mass.innerIndexPtr();
   std::vector<uint8_t> exact(static_cast<size_t>(grid.unknownCount()), 0);

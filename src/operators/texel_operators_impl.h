@@ -121,8 +121,8 @@ struct TexelOperators::Impl {
   void assembleScreened(double alpha, const ColumnVisitor& visit, const ProgressCallback& progress,
                         FloatSystem* out = nullptr);
   /// Per unknown: 1 for those whose entries a FloatSystem keeps exact, the texels whose footprint
-  /// is not inside one chart (TexelClass::Boundary) and those with seam pieces (rows that are
-  /// not a regular 3 x 3 stencil); the multigrid solves their rows directly.
+  /// is not inside one chart (TexelClass::Boundary) and those whose column reaches beyond their
+  /// 3 x 3 lattice neighbours (seam entries); the multigrid solves their rows directly.
   std::vector<uint8_t> exactUnknowns() const;
   /// Bands each face's plain pieces meet, first[f] to last[f] (none if last[f] < 0).
   struct FaceBands {

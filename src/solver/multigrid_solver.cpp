@@ -81,7 +81,7 @@ struct HandedOver {
     return compact ? compact->rowSums() : std::span<const float>();
   }
   /// Frees A^0.
-  void free() const {
+  void free() {
     if (matrix) Eigen::SparseMatrix<double>().swap(*matrix);
     if (compact) *compact = FloatSystem();
   }
@@ -240,10 +240,14 @@ struct MultigridSolver<Scalar>::Impl {
   /// pattern (galerkinFromLevel).
   void walkLevels(const SparseSum& a0, bool symbolicPhase, bool numericPhase,
                   HandedOver handedOver = {}) {
-    // Only a set-up reads unknownOfSlot: rebuilt for it, freed after (8 B/t at spot 4096²).
+    // Only a set-up reads unknownOfSlot: rebuilt for it, freed after (8 B/t at spot 4096²),
+    // also when the set-up throws.
+    struct ReleasedAfter {
+      GridHierarchy& hierarchy;
+      ~ReleasedAfter() { hierarchy.releaseUnknownOfSlot(); }
+    } released{hierarchy};
     hierarchy.restoreUnknownOfSlot();
     walkLevelsWithUnknownOfSlot(a0, symbolicPhase, numericPhase, handedOver);
-    hierarchy.releaseUnknownOfSlot();
   }
 
   /// walkLevels, with every level's unknownOfSlot there.

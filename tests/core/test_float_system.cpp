@@ -14,7 +14,7 @@ using namespace texgrad;
 
 namespace {
 
-/// A 3 x 3 tridiagonal pattern (7 entries) held by `arrays`: column starts, then row indices.
+/// A 3 x 3 tridiagonal pattern (7 entries): column starts, then row indices.
 struct Tridiagonal {
   std::vector<int> outer{0, 2, 5, 7};
   std::vector<int> inner{0, 1, 0, 1, 2, 1, 2};
@@ -42,7 +42,9 @@ TEST(FloatSystem, KeepsTheEntriesOfExactUnknownsInDoubleAndRoundsTheRest) {
           << "entry " << e;
     }
   for (int u = 0; u < 3; ++u) EXPECT_EQ(a.rowSums()[u], static_cast<float>(third * u));
-  EXPECT_GE(a.storageBytes(), 7 * 4 + 7 * 4 + 3 * 8 + 3 * 4);
+  // Column starts and row indices, rounded values, row sums, one word of marks with its rank,
+  // three exact values.
+  EXPECT_EQ(a.storageBytes(), (4 + 7) * 4 + 7 * 4 + 3 * 4 + 8 + 4 + 3 * 8);
 
   FloatSystem moved = std::move(a);
   EXPECT_EQ(moved.nonZeros(), 7);
@@ -57,5 +59,8 @@ TEST(FloatSystem, RefusesSizesThatDisagree) {
   EXPECT_THROW(FloatSystem(3, pattern.outer.data(), pattern.inner.data(), std::vector<uint8_t>(2)),
                InvalidInputError);
   EXPECT_THROW(FloatSystem(3, nullptr, nullptr, std::vector<uint8_t>(3)), InvalidInputError);
-  EXPECT_EQ(FloatSystem(0, nullptr, nullptr, {}).nonZeros(), 0);
+  const FloatSystem empty(0, nullptr, nullptr, {});
+  EXPECT_EQ(empty.nonZeros(), 0);
+  EXPECT_EQ(empty.outer()[0], 0);  // column starts to read, as an empty Eigen matrix has
+  EXPECT_EQ(FloatSystem().outer()[0], 0);
 }

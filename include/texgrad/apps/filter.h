@@ -134,6 +134,8 @@ class InteractiveFilter {
   Eigen::MatrixXd massX0_, stiffnessX0_;  ///< M x0 and S x0: fixed, reused by every setParameters
   BarelyCoveredNeighbours barely_;        ///< bounded in image() (none with rawSolution)
   SystemSolver solver_;
+  /// The operators' exactUnknowns, for A rounded as the one-shot filter rounds it (found once).
+  std::vector<uint8_t> exactUnknowns_;
 };
 
 }  // namespace texgrad

@@ -135,10 +135,10 @@ class SystemSolver {
   void initAndUpdate(const SparseSum& a, const ProgressCallback& progress = {});
   /// update on A read from a view, forming it only where initAndUpdate(const SparseSum&) does.
   void update(const SparseSum& a, const ProgressCallback& progress = {});
-  /// True if this solver takes A as a FloatSystem for what the unrounded A gives: float
-  /// multigrid cycles keeping no copy of A (see MatrixCopy), whose interior stencils and row sums
-  /// come out the same (MultigridSolver::initAndUpdate(FloatSystem&&)). A caller can then form A
-  /// in float only (TexelOperators::screenedSystemInFloat: 8 bytes per entry instead of 12).
+  /// True if this solver takes A as a FloatSystem as well as the unrounded A: float multigrid
+  /// cycles keeping no copy of A (see MatrixCopy), whose interior stencils and row sums come out
+  /// the same (MultigridSolver::initAndUpdate(FloatSystem&&)). A caller can then form A in float
+  /// only (TexelOperators::screenedSystemInFloat: about 8 bytes per entry instead of 12).
   bool takesFloatSystem() const;
   /// takesFloatSystem() of a solver constructed with these settings and copy (before any change
   /// to double cycles), for a caller that forms A before it builds the solver.

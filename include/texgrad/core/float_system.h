@@ -17,14 +17,16 @@ namespace texgrad {
 /// double as well; and each row's sum formed in double from the unrounded entries, then rounded.
 /// The interior stencils a multigrid builds are float anyway, and their diagonals come from the
 /// row sums, which keep the small screening part (alpha M 1, S 1 = 0) a nearly singular A hinges
-/// on; the other rows, solved directly, need their entries exact (a sliver's block is only just
-/// positive definite).
+/// on; the rows of texels without a regular stencil, solved directly, need their entries exact
+/// (a sliver's block is only just positive definite), while a rounded row solved directly (one
+/// near a weak row) takes its diagonal from its row sum.
 class FloatSystem {
  public:
   FloatSystem() = default;
   /// A system of `rows` unknowns on a pattern (outer: rows + 1 column starts; inner: the row of
-  /// each entry, ascending in each column) whose arrays the caller keeps alive (keepPatternAlive),
-  /// all entries and row sums zero; exactUnknown (one per row) marks the exact unknowns. Throws
+  /// each entry, ascending in each column) whose arrays become the system's (keepPatternAlive
+  /// hands over what holds them: a set-up that takes the system drops their pages), all entries
+  /// and row sums zero; exactUnknown (one per row) marks the exact unknowns. Throws
   /// InvalidInputError if the sizes disagree.
   FloatSystem(int rows, int* outer, int* inner, std::span<const uint8_t> exactUnknown);
   /// Takes `other` over, leaving it empty.
@@ -50,8 +52,8 @@ class FloatSystem {
   int rows() const { return rows_; }
   /// Stored entries.
   int64_t nonZeros() const { return rows_ == 0 ? 0 : outer_[rows_]; }
-  /// Column starts (rows() + 1), as Eigen's outerIndexPtr().
-  const int* outer() const { return outer_; }
+  /// Column starts (rows() + 1), as Eigen's outerIndexPtr() (a single 0 for an empty system).
+  const int* outer() const { return outer_ ? outer_ : &kNoEntries; }
   /// Row of each entry, as Eigen's innerIndexPtr().
   const int* inner() const { return inner_; }
   /// True if entry e is held in double (its row or its column is an exact unknown's).
@@ -83,6 +85,7 @@ class FloatSystem {
     return rankBefore_[word] + static_cast<size_t>(std::popcount(below));
   }
 
+  static constexpr int kNoEntries = 0;  ///< the column starts of an empty system
   int rows_ = 0;
   int* outer_ = nullptr;
   int* inner_ = nullptr;

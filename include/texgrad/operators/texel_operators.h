@@ -166,8 +166,8 @@ class TexelOperators {
                                            const ProgressCallback& progress = {});
   /// Per unknown: 1 for those whose entries screenedSystemInFloat keeps exact (in double as
   /// well as float), the texels that have no regular interior stencil: those whose footprint is
-  /// not inside one chart (TexelClass::Boundary) and those with seam pieces. Reads the grid's
-  /// texel classes.
+  /// not inside one chart (TexelClass::Boundary) and those whose column reaches beyond their
+  /// 3 x 3 lattice neighbours (seam entries). Reads the grid's texel classes.
   std::vector<uint8_t> exactUnknowns() const;
   /// True while the assembly of operators built with OperatorOptions::deferAssembly has not
   /// run: mass(), stiffness(), seamContinuity() and the products formed from them throw

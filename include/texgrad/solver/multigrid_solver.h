@@ -127,11 +127,13 @@ class MultigridSolver {
   void initAndUpdate(const SparseSum& a);
   /// initAndUpdate(grid, a&&) on the hierarchy already built, as initAndUpdate(a).
   void initAndUpdate(Eigen::SparseMatrix<double>&& a);
-  /// initAndUpdate(a&&) for A as a FloatSystem (entries in float, 8 bytes each where a double
-  /// matrix takes 12): the interior rows get the same float stencils and row sums as from the
-  /// unrounded A; the boundary rows' and a direct coarsest level's diagonals are set from the row
-  /// sums, so each row keeps its sum, as the difference form of the interior rows does. For
-  /// float cycles (double cycles would lose the entries' last bits).
+  /// initAndUpdate(a&&) for A as a FloatSystem (entries in float, about 8 bytes each where a
+  /// double matrix takes 12): the interior stencils and row sums are the same as from the
+  /// unrounded A (lines, whose pivots read the rounded diagonals, differ by rounding); the
+  /// rounded diagonals of boundary rows and of a direct coarsest level are set from the row sums,
+  /// so each row keeps its sum, as the difference form of the interior rows does. For float
+  /// cycles (double cycles would lose the entries' last bits). The set-up drops the pages of the
+  /// system's pattern as it reads them.
   void initAndUpdate(FloatSystem&& a);
   /// update(a&&) for A as a FloatSystem (see initAndUpdate(FloatSystem&&)).
   void update(FloatSystem&& a);
