@@ -156,6 +156,16 @@ void SolverSettings::validate() const {
                             "; expected 0 to 1 (a relative residual; 0 = the kind's default)");
 }
 
+namespace {
+
+/// A FloatSystem formed in double (formedMatrix) for a solver that keeps A; the system is freed
+/// once formed.
+Eigen::SparseMatrix<double> formedInDouble(FloatSystem a) {
+  return formedMatrix(a);
+}
+
+}  // namespace
+
 struct SystemSolver::Impl {
   SolverSettings settings;
   std::unique_ptr<MultigridSolver<float>> multigridFloat;
@@ -251,15 +261,24 @@ struct SystemSolver::Impl {
     });
   }
 
-  /// Hands `from` (A as a FloatSystem) over to `setUp` (a MultigridSolver's update or
-  /// initAndUpdate on it), for a solver that takes it (takesFloatSystem: float cycles, no copy
-  /// of A kept).
-  template <typename SetUp>
-  void adoptFloatSystem(FloatSystem& from, SetUp&& setUp) {
+  /// Hands `from` (A as a FloatSystem) over to the float multigrid's initAndUpdate (`init`) or
+  /// update, for a solver that takes it (takesFloatSystem: float cycles, no copy of A kept),
+  /// reporting and timing the set-up as the other set-ups do.
+  void setUpFloatSystem(FloatSystem& from, bool init, const ProgressCallback& progress) {
+    reportProgress(progress, kSetupStage, 0.0);
+    const auto start = std::chrono::steady_clock::now();
     Eigen::SparseMatrix<double>().swap(a);
     rows = from.rows();
     cacheValid = false;
-    setUp(*multigridFloat, std::move(from));
+    if (init) {
+      multigridFloat->initAndUpdate(std::move(from));
+      initTime = initSecondsSince(start);
+      updateTime = 0.0;
+    } else {
+      multigridFloat->update(std::move(from));
+      updateTime = secondsSince(start);
+    }
+    reportProgress(progress, kSetupStage, 1.0);
   }
 
   /// Runs `setUp` (a MultigridSolver's update or initAndUpdate) on the adopted A: as a view
@@ -587,38 +606,19 @@ bool SystemSolver::takesFloatSystem(const SolverSettings& settings, MatrixCopy c
 }
 
 void SystemSolver::initAndUpdate(FloatSystem&& a, const ProgressCallback& progress) {
-  FloatSystem owned = std::move(a);
   if (!takesFloatSystem()) {
-    Eigen::SparseMatrix<double> formed = formedMatrix(owned);
-    owned = FloatSystem();
-    initAndUpdate(std::move(formed), progress);
+    initAndUpdate(formedInDouble(std::move(a)), progress);
     return;
   }
-  reportProgress(progress, kSetupStage, 0.0);
-  const auto start = std::chrono::steady_clock::now();
-  impl_->adoptFloatSystem(owned, [](auto& solver, FloatSystem&& system) {
-    solver.initAndUpdate(std::move(system));
-  });
-  impl_->initTime = impl_->initSecondsSince(start);
-  impl_->updateTime = 0.0;
-  reportProgress(progress, kSetupStage, 1.0);
+  impl_->setUpFloatSystem(a, true, progress);
 }
 
 void SystemSolver::update(FloatSystem&& a, const ProgressCallback& progress) {
-  FloatSystem owned = std::move(a);
   if (!takesFloatSystem()) {
-    Eigen::SparseMatrix<double> formed = formedMatrix(owned);
-    owned = FloatSystem();
-    update(std::move(formed), progress);
+    update(formedInDouble(std::move(a)), progress);
     return;
   }
-  reportProgress(progress, kSetupStage, 0.0);
-  const auto start = std::chrono::steady_clock::now();
-  impl_->adoptFloatSystem(owned, [](auto& solver, FloatSystem&& system) {
-    solver.update(std::move(system));
-  });
-  impl_->updateTime = secondsSince(start);
-  reportProgress(progress, kSetupStage, 1.0);
+  impl_->setUpFloatSystem(a, false, progress);
 }
 
 void SystemSolver::initAndUpdate(const SparseSum& a, const ProgressCallback& progress) {

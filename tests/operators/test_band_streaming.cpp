@@ -101,6 +101,27 @@ struct VisitedColumns {
   }
 };
 
+/// A mesh's atlas and grid at resolution x resolution, options that assemble once and that defer
+/// the assembly, and operators assembled once.
+struct AssembledAndDeferred {
+  AssembledAndDeferred(const TexturedMesh& mesh, int resolution, const OperatorOptions& options)
+      : atlas(buildAtlas(mesh)),
+        grid(buildTexelGrid(mesh, atlas, resolution, resolution)),
+        once(withPiecesFreed(options, false)),
+        deferral(withPiecesFreed(options, true)),
+        assembled(mesh, atlas, grid, once) {}
+  /// `options` with the piece integrals freed, the assembly deferred or not.
+  static OperatorOptions withPiecesFreed(OperatorOptions options, bool deferred) {
+    options.keepPieceIntegrals = false;
+    options.deferAssembly = deferred;
+    return options;
+  }
+  Atlas atlas;
+  TexelGrid grid;
+  OperatorOptions once, deferral;
+  TexelOperators assembled;
+};
+
 /// Assembles `mesh` at resolution x resolution first (assembledOnce), and deferred to the
 /// visiting screenedSystem, and expects the visitor to see M and S bit for bit, each column once,
 /// and the same alpha M + S (+ alpha lambda C); also for operators assembled first.
@@ -108,23 +129,18 @@ void expectDeferredMatchesAssembled(const TexturedMesh& mesh, int resolution,
                                     const OperatorOptions& options, const std::string& name) {
   SCOPED_TRACE(name + " at " + std::to_string(resolution));
   constexpr double kAlpha = 0.37;
-  const Atlas atlas = buildAtlas(mesh);
-  const TexelGrid grid = buildTexelGrid(mesh, atlas, resolution, resolution);
-  OperatorOptions once = options, deferral = options;
-  once.keepPieceIntegrals = deferral.keepPieceIntegrals = false;
-  deferral.deferAssembly = true;
-  const TexelOperators assembled(mesh, atlas, grid, once);
-  for (const OperatorOptions& built : {deferral, once}) {
-    auto operators = std::make_unique<TexelOperators>(mesh, atlas, grid, built);
+  const AssembledAndDeferred both(mesh, resolution, options);
+  for (const OperatorOptions& built : {both.deferral, both.once}) {
+    auto operators = std::make_unique<TexelOperators>(mesh, both.atlas, both.grid, built);
     EXPECT_EQ(operators->assemblyDeferred(), built.deferAssembly);
-    VisitedColumns seen(assembled.mass());
+    VisitedColumns seen(both.assembled.mass());
     const SparseMatrixd system =
         TexelOperators::screenedSystem(std::move(operators), kAlpha, seen.visitor());
     EXPECT_EQ(seen.wrongVisits(), 0) << "deferred " << built.deferAssembly;
-    EXPECT_TRUE(identical(seen.mass, assembled.mass())) << "deferred " << built.deferAssembly;
-    EXPECT_TRUE(identical(seen.stiffness, assembled.stiffness()))
+    EXPECT_TRUE(identical(seen.mass, both.assembled.mass())) << "deferred " << built.deferAssembly;
+    EXPECT_TRUE(identical(seen.stiffness, both.assembled.stiffness()))
         << "deferred " << built.deferAssembly;
-    EXPECT_TRUE(identical(system, assembled.screenedSystem(kAlpha)))
+    EXPECT_TRUE(identical(system, both.assembled.screenedSystem(kAlpha)))
         << "deferred " << built.deferAssembly;
   }
 }
@@ -188,25 +204,20 @@ void expectFloatSystemRoundsTheDoubleOne(const TexturedMesh& mesh, int resolutio
                                          const OperatorOptions& options, const std::string& name) {
   SCOPED_TRACE(name + " at " + std::to_string(resolution));
   constexpr double kAlpha = 0.37;
-  const Atlas atlas = buildAtlas(mesh);
-  const TexelGrid grid = buildTexelGrid(mesh, atlas, resolution, resolution);
-  OperatorOptions once = options, deferral = options;
-  once.keepPieceIntegrals = deferral.keepPieceIntegrals = false;
-  deferral.deferAssembly = true;
-  const TexelOperators assembled(mesh, atlas, grid, once);
-  const std::vector<uint8_t> exact = assembled.exactUnknowns();
-  expectInexactAreRegular(grid, assembled.mass(), exact);
-  const SparseMatrixd reference = assembled.screenedSystem(kAlpha);
-  expectRounded(roundedSystem(assembled.screenedSystem(kAlpha), exact), reference, exact,
+  const AssembledAndDeferred both(mesh, resolution, options);
+  const std::vector<uint8_t> exact = both.assembled.exactUnknowns();
+  expectInexactAreRegular(both.grid, both.assembled.mass(), exact);
+  const SparseMatrixd reference = both.assembled.screenedSystem(kAlpha);
+  expectRounded(roundedSystem(both.assembled.screenedSystem(kAlpha), exact), reference, exact,
                 "roundedSystem");
-  for (const OperatorOptions& built : {deferral, once}) {
-    auto operators = std::make_unique<TexelOperators>(mesh, atlas, grid, built);
-    VisitedColumns seen(assembled.mass());
+  for (const OperatorOptions& built : {both.deferral, both.once}) {
+    auto operators = std::make_unique<TexelOperators>(mesh, both.atlas, both.grid, built);
+    VisitedColumns seen(both.assembled.mass());
     const FloatSystem f =
         TexelOperators::screenedSystemInFloat(std::move(operators), kAlpha, seen.visitor());
     EXPECT_EQ(seen.wrongVisits(), 0) << "deferred " << built.deferAssembly;
-    EXPECT_TRUE(identical(seen.mass, assembled.mass())) << "deferred " << built.deferAssembly;
-    EXPECT_TRUE(identical(seen.stiffness, assembled.stiffness()))
+    EXPECT_TRUE(identical(seen.mass, both.assembled.mass())) << "deferred " << built.deferAssembly;
+    EXPECT_TRUE(identical(seen.stiffness, both.assembled.stiffness()))
         << "deferred " << built.deferAssembly;
     expectRounded(f, reference, exact, built.deferAssembly ? "deferred" : "assembled first");
   }
