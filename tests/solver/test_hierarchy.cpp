@@ -76,8 +76,9 @@ TEST(GridHierarchy, UnknownOfSlotFreedIsRebuiltAsBuiltAndProlongationsDoWithoutI
   EXPECT_LT(h.storageBytes(), whole);
   for (int l = 0; l < h.levelCount(); ++l) {
     EXPECT_TRUE(h.level(l).unknownOfSlot.empty()) << "level " << l;
-    if (l + 1 < h.levelCount())
+    if (l + 1 < h.levelCount()) {
       EXPECT_EQ((h.prolongation(l) - built.prolongation(l)).norm(), 0.0) << "level " << l;
+    }
   }
   const Eigen::SparseMatrix<double> a = p.system(1.0);
   EXPECT_THROW(galerkinProduct(a, h.level(0), h.level(1)), InvalidInputError);
