@@ -164,7 +164,7 @@ void TexelOperators::Impl::assembleScreened(double alpha, const ColumnVisitor& v
         grid.texelOfUnknown.begin());
   };
   // Column u of M and S complete in `m` and `s`: S's diagonal formed, shown, then alpha M + S,
-  // in place or into `out` with its sum, in the order the multigrid sums a row.
+  // in place (M's values, or in float the window's copy) and then into `out` with its sum.
   auto finishColumn = [&](int u, double* m, double* s) {
     const int length = outer[u + 1] - outer[u];
     const std::span<const int> rows(inner + outer[u], static_cast<size_t>(length));
@@ -172,17 +172,8 @@ void TexelOperators::Impl::assembleScreened(double alpha, const ColumnVisitor& v
     if (visit)
       visit(OperatorColumn{u, rows, std::span<const double>(m, static_cast<size_t>(length)),
                            std::span<const double>(s, static_cast<size_t>(length))});
-    if (!out) {
-      for (int k = 0; k < length; ++k) m[k] = alpha * m[k] + s[k];
-      return;
-    }
-    double sum = 0.0;
-    for (int k = 0; k < length; ++k) {
-      const double value = alpha * m[k] + s[k];
-      out->set(outer[u] + k, value);
-      sum += value;
-    }
-    out->setRowSum(u, sum);
+    for (int k = 0; k < length; ++k) m[k] = alpha * m[k] + s[k];
+    if (out) out->setColumn(u, std::span<const double>(m, static_cast<size_t>(length)));
   };
   const std::vector<int32_t>& seamColumns = stream.seamColumns;
   ColumnValues seamStiffness = columnValuesOf(mass, seamColumns);

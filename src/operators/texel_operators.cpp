@@ -735,14 +735,9 @@ FloatSystem roundedSystem(SparseMatrixd&& a, std::span<const uint8_t> exactUnkno
   const double* values = pattern->valuePtr();
   FloatSystem out(n, pattern->outerIndexPtr(), pattern->innerIndexPtr(), exactUnknown);
   tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& r) {
-    for (int u = r.begin(); u != r.end(); ++u) {
-      double sum = 0.0;  // in column order, as screenedSystemInFloat and the multigrid sum
-      for (int k = outer[u]; k < outer[u + 1]; ++k) {
-        out.set(k, values[k]);
-        sum += values[k];
-      }
-      out.setRowSum(u, sum);
-    }
+    for (int u = r.begin(); u != r.end(); ++u)
+      out.setColumn(u, std::span<const double>(values + outer[u],
+                                               static_cast<size_t>(outer[u + 1] - outer[u])));
   });
   detail::discardWholePages(pattern->valuePtr(),
                             static_cast<size_t>(pattern->nonZeros()) * sizeof(double));

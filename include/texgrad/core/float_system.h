@@ -47,6 +47,17 @@ class FloatSystem {
   }
   /// Sets row u's sum (of the unrounded entries), rounded to float.
   void setRowSum(int u, double sum) { rowSums_[static_cast<size_t>(u)] = static_cast<float>(sum); }
+  /// Sets column u's entries to `values` (its length; set) and its row sum (the symmetric A's
+  /// row u) to their sum in column order, as the multigrid sums a row. Different columns may be
+  /// set concurrently.
+  void setColumn(int u, std::span<const double> values) {
+    double sum = 0.0;
+    for (size_t k = 0; k < values.size(); ++k) {
+      set(outer_[u] + static_cast<int64_t>(k), values[k]);
+      sum += values[k];
+    }
+    setRowSum(u, sum);
+  }
 
   /// Rows (= columns).
   int rows() const { return rows_; }
