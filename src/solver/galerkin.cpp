@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
@@ -13,6 +14,7 @@
 #include "solver/grid_kernels.h"
 #include "solver/level_system.h"
 #include "texgrad/core/error.h"
+#include "texgrad/core/page_allocator.h"
 
 namespace texgrad {
 namespace {
@@ -23,26 +25,80 @@ using RowMajor = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 /// Coarse columns per task (fixed, so the split does not depend on the thread count).
 constexpr Eigen::Index kColumnsPerTask = 2048;
 
-/// Dense accumulator over an index range with the list of touched indices; reset by stamps
-/// (a column index: matrices have int indices).
-struct Accumulator {
-  std::vector<double> value;
-  std::vector<int> stamp;
-  std::vector<int> touched;
-  void resize(Eigen::Index n) {
-    if (static_cast<Eigen::Index>(value.size()) == n) return;
-    value.assign(static_cast<size_t>(n), 0.0);
-    stamp.assign(static_cast<size_t>(n), -1);
-  }
-  void add(int i, double v, int column) {
-    const size_t si = static_cast<size_t>(i);
-    if (stamp[si] != column) {
-      stamp[si] = column;
-      value[si] = 0.0;
-      touched.push_back(i);
+/// Sums of values by index for the few indices one column touches, in the order first touched:
+/// open addressing with linear probing in a table at most half full, emptied through the list of
+/// touched slots. Its size follows one column's entries, not the matrix's order, so a thread's
+/// accumulators stay small at any texture size (dense ones over the fine unknowns held 12 bytes
+/// per fine unknown per thread, docs/memory.md).
+class Accumulator {
+ public:
+  /// Adds v to the sum at index i (i >= 0).
+  void add(int i, double v) {
+    size_t s = slotOf(i);
+    while (keys_[s] != i) {
+      if (keys_[s] < 0) {
+        s = insert(i, s);
+        break;
+      }
+      s = (s + 1) & mask_;
     }
-    value[si] += v;
+    sums_[s] += v;
   }
+  /// Calls f(index, sum) for each index touched since clear(), in the order first touched.
+  template <typename F>
+  void forEach(F&& f) const {
+    for (size_t s : touched_) f(keys_[s], sums_[s]);
+  }
+  /// Forgets every sum.
+  void clear() {
+    for (size_t s : touched_) keys_[s] = -1;
+    touched_.clear();
+  }
+
+ private:
+  size_t slotOf(int i) const {  // Fibonacci hashing: the top bits of i times 2^32 / phi
+    return (static_cast<uint32_t>(i) * 2654435769u) >> (32 - bits_);
+  }
+  /// The first empty slot from i's own (i not in the table).
+  size_t emptySlotFor(int i) const {
+    size_t s = slotOf(i);
+    while (keys_[s] >= 0) s = (s + 1) & mask_;
+    return s;
+  }
+  /// Puts i, with a zero sum, in the empty slot s, or in a table twice as large if this one
+  /// would be more than half full; returns its slot.
+  size_t insert(int i, size_t s) {
+    if (2 * (touched_.size() + 1) > keys_.size()) {
+      grow();
+      s = emptySlotFor(i);
+    }
+    keys_[s] = i;
+    sums_[s] = 0.0;
+    touched_.push_back(s);
+    return s;
+  }
+  /// Doubles the table, keeping the touched order (out of line: add's loop stays small).
+  [[gnu::noinline]] void grow() {
+    const std::vector<int> keys = std::move(keys_);
+    const std::vector<double> sums = std::move(sums_);
+    std::vector<size_t> touched = std::move(touched_);
+    ++bits_;
+    keys_.assign(size_t(1) << bits_, -1);
+    sums_.assign(keys_.size(), 0.0);
+    mask_ = keys_.size() - 1;
+    for (size_t& t : touched) {
+      const size_t s = emptySlotFor(keys[t]);
+      keys_[s] = keys[t];
+      sums_[s] = sums[t];
+      t = s;
+    }
+    touched_ = std::move(touched);
+  }
+  int bits_ = 6;
+  size_t mask_ = (size_t(1) << 6) - 1;
+  std::vector<int> keys_ = std::vector<int>(size_t(1) << 6, -1);  ///< -1: an empty slot
+  std::vector<double> sums_ = std::vector<double>(size_t(1) << 6, 0.0);
+  std::vector<size_t> touched_;  ///< slots in the order first touched
 };
 
 /// One task's columns of the result, in compressed form with a local column pointer.
@@ -52,9 +108,18 @@ struct Block {
   std::vector<double> values;
 };
 
+/// Frees a block's storage, letting the system drop its pages first: a block of the heap freed
+/// in the middle of it would otherwise stay resident beside the result it was copied into.
+void release(Block& block) {
+  detail::discardWholePages(block.inner.data(), block.inner.size() * sizeof(int));
+  detail::discardWholePages(block.values.data(), block.values.size() * sizeof(double));
+  block = Block();
+}
+
 struct Scratch {
   Accumulator fine, coarse;
   std::vector<std::pair<int, double>> column;  ///< (fine row, weight) of one column of P
+  std::vector<std::pair<int, double>> sorted;  ///< one coarse column's entries by row
   Block block;  ///< the current task's columns, grown once per thread and copied out exactly
 };
 
@@ -63,15 +128,12 @@ struct Scratch {
 /// weight) entries of column j of P by increasing row, parents(r, f) calls f(coarse column,
 /// weight) for the entries of row r of P by increasing column.
 template <typename Rows, typename Children, typename Parents>
-Sparse galerkinColumns(Eigen::Index fine, Rows rowOf, Eigen::Index nc, Children children,
-                       Parents parents) {
+Sparse galerkinColumns(Rows rowOf, Eigen::Index nc, Children children, Parents parents) {
   const Eigen::Index tasks = (nc + kColumnsPerTask - 1) / kColumnsPerTask;
   std::vector<Block> blocks(static_cast<size_t>(tasks));
   tbb::enumerable_thread_specific<Scratch> scratch;
   tbb::parallel_for(Eigen::Index(0), tasks, [&](Eigen::Index t) {
     Scratch& s = scratch.local();
-    s.fine.resize(fine);
-    s.coarse.resize(nc);
     Block& block = s.block;
     block.count.clear();
     block.inner.clear();
@@ -79,20 +141,22 @@ Sparse galerkinColumns(Eigen::Index fine, Rows rowOf, Eigen::Index nc, Children 
     const int first = static_cast<int>(t * kColumnsPerTask);
     const int last = static_cast<int>(std::min(nc, t * kColumnsPerTask + kColumnsPerTask));
     for (int j = first; j < last; ++j) {
-      s.fine.touched.clear();
-      s.coarse.touched.clear();
+      s.fine.clear();
+      s.coarse.clear();
       children(j, s.column);
       for (const auto& [row, weight] : s.column)  // (A P)_{:, j}
-        rowOf(row, [&, w = weight](int column, double value) { s.fine.add(column, value * w, j); });
-      for (int r : s.fine.touched)  // (Pᵀ A P)_{:, j}
-        parents(r, [&](int k, double weight) {
-          s.coarse.add(k, weight * s.fine.value[static_cast<size_t>(r)], j);
-        });
-      std::sort(s.coarse.touched.begin(), s.coarse.touched.end());
-      block.count.push_back(static_cast<int>(s.coarse.touched.size()));
-      for (int k : s.coarse.touched) {
+        rowOf(row, [&, w = weight](int column, double value) { s.fine.add(column, value * w); });
+      s.fine.forEach([&](int r, double sum) {  // (Pᵀ A P)_{:, j}
+        parents(r, [&](int k, double weight) { s.coarse.add(k, weight * sum); });
+      });
+      s.sorted.clear();
+      s.coarse.forEach([&](int k, double sum) { s.sorted.emplace_back(k, sum); });
+      std::sort(s.sorted.begin(), s.sorted.end(),
+                [](const auto& x, const auto& y) { return x.first < y.first; });
+      block.count.push_back(static_cast<int>(s.sorted.size()));
+      for (const auto& [k, sum] : s.sorted) {
         block.inner.push_back(k);
-        block.values.push_back(s.coarse.value[static_cast<size_t>(k)]);
+        block.values.push_back(sum);
       }
     }
     // Exact-size copy: growth slack would otherwise stay allocated until the result is built.
@@ -101,11 +165,11 @@ Sparse galerkinColumns(Eigen::Index fine, Rows rowOf, Eigen::Index nc, Children 
     out.inner.assign(block.inner.begin(), block.inner.end());
     out.values.assign(block.values.begin(), block.values.end());
   });
-  scratch.clear();  // the accumulators go before the result is allocated
+  scratch.clear();
   Sparse c(nc, nc);
   Eigen::Index nonZeros = 0;
   for (const Block& block : blocks) nonZeros += static_cast<Eigen::Index>(block.inner.size());
-  c.resizeNonZeros(nonZeros);
+  c.resizeNonZeros(nonZeros);  // not yet written, so not yet resident
   int* outer = c.outerIndexPtr();
   outer[0] = 0;
   Eigen::Index column = 0;
@@ -114,11 +178,14 @@ Sparse galerkinColumns(Eigen::Index fine, Rows rowOf, Eigen::Index nc, Children 
       outer[column + 1] = outer[column] + count;
       ++column;
     }
+  // Each block is released once copied, so the result grows as the blocks shrink: A^1 is never
+  // held twice.
   tbb::parallel_for(Eigen::Index(0), tasks, [&](Eigen::Index t) {
-    const Block& block = blocks[static_cast<size_t>(t)];
+    Block& block = blocks[static_cast<size_t>(t)];
     const int offset = outer[t * kColumnsPerTask];
     std::copy(block.inner.begin(), block.inner.end(), c.innerIndexPtr() + offset);
     std::copy(block.values.begin(), block.values.end(), c.valuePtr() + offset);
+    release(block);
   });
   return c;
 }
@@ -135,7 +202,7 @@ auto rowsOf(const SparseSum& a) {
 template <typename Rows>
 Sparse latticeProduct(const GridLevel& fine, const GridLevel& coarse, Rows rowOf) {
   return galerkinColumns(
-      fine.unknownCount(), rowOf, coarse.unknownCount(),
+      rowOf, coarse.unknownCount(),
       [&](Eigen::Index j, std::vector<std::pair<int, double>>& out) {
         // The fine texels within one lattice step of coarse texel j's position, in its chart.
         out.clear();
@@ -147,8 +214,8 @@ Sparse latticeProduct(const GridLevel& fine, const GridLevel& coarse, Rows rowOf
             if (!box.contains(fx, fy)) continue;
             const int r = fine.unknownOfSlot[static_cast<size_t>(box.slot(fx, fy))];
             if (r >= 0)
-              out.emplace_back(r, detail::transferWeight<double>(fx, x) *
-                                      detail::transferWeight<double>(fy, y));
+              out.emplace_back(
+                  r, detail::transferWeight<double>(fx, x) * detail::transferWeight<double>(fy, y));
           }
         std::sort(out.begin(), out.end());  // by fine index, as in P's column, for any numbering
       },
@@ -179,7 +246,7 @@ Sparse galerkinProduct(const SparseSum& a, const Sparse& p) {
   requireSquare(a, p.rows());
   const RowMajor pRows = p;  // row r of P: the coarse columns fine texel r interpolates from
   return galerkinColumns(
-      a.rows(), rowsOf(a), p.cols(),
+      rowsOf(a), p.cols(),
       [&](Eigen::Index j, std::vector<std::pair<int, double>>& out) {
         out.clear();
         for (Sparse::InnerIterator pi(p, j); pi; ++pi)

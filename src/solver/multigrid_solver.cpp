@@ -65,6 +65,16 @@ int64_t sparseBytes(const Eigen::SparseMatrix<double>& a) {
          (a.outerSize() > 0 ? a.outerSize() + 1 : 0) * int64_t(sizeof(int));
 }
 
+/// Lets the system drop the pages of the entries of a matrix about to be freed: a block freed
+/// inside the heap stays resident until it is reused (reuseFreedMemory), and a coarse A^l, the
+/// largest block a set-up frees (A^1: 28 bytes per texel at spot 4096²), would otherwise sit
+/// resident through the solves.
+void dropEntryPages(Eigen::SparseMatrix<double>& a) {
+  const auto entries = static_cast<size_t>(a.nonZeros());
+  detail::discardWholePages(a.valuePtr(), entries * sizeof(double));
+  detail::discardWholePages(a.innerIndexPtr(), entries * sizeof(int));
+}
+
 /// A^0 handed over to a set-up (initAndUpdate or update on an rvalue), as a double matrix or a
 /// FloatSystem: the walk owns it, drops its pages as level 0's stencils read it and frees it
 /// once level 0 is set up.
@@ -351,6 +361,7 @@ struct MultigridSolver<Scalar>::Impl {
       if (l < coarsest()) {
         coarse.swap(next);  // next now holds A^l, freed at the end of this iteration
         a = SparseSum(coarse);
+        dropEntryPages(next);
       }
     }
   }

@@ -24,6 +24,16 @@ Eigen::SparseMatrix<double> randomSparse(int rows, int cols, int entries, std::m
   return m;
 }
 
+/// The largest absolute entry of c - reference.
+double largestDifference(const Eigen::SparseMatrix<double>& c,
+                         const Eigen::SparseMatrix<double>& reference) {
+  const Eigen::SparseMatrix<double> difference = c - reference;
+  double largest = 0.0;
+  for (Eigen::Index k = 0; k < difference.nonZeros(); ++k)
+    largest = std::max(largest, std::abs(difference.valuePtr()[k]));
+  return largest;
+}
+
 }  // namespace
 
 TEST(Galerkin, EqualsTheReferenceProduct) {
@@ -35,13 +45,24 @@ TEST(Galerkin, EqualsTheReferenceProduct) {
   const Eigen::SparseMatrix<double> c = galerkinProduct(a, p);
   ASSERT_EQ(c.rows(), 5000);
   ASSERT_EQ(c.cols(), 5000);
-  const Eigen::SparseMatrix<double> difference = c - reference;
-  double largest = 0.0;
-  for (Eigen::Index k = 0; k < difference.nonZeros(); ++k)
-    largest = std::max(largest, std::abs(difference.valuePtr()[k]));
+  const double largest = largestDifference(c, reference);
   EXPECT_GT(reference.nonZeros(), 1000);
   EXPECT_LT(largest, 1e-12);
   EXPECT_TRUE(c.isCompressed());
+}
+
+TEST(Galerkin, EqualsTheReferenceProductWhenAColumnReachesEveryRow) {
+  // A column of P over every fine row: its accumulators outgrow their first tables many times.
+  std::mt19937 rng(5);
+  const Eigen::SparseMatrix<double> a = randomSparse(3000, 3000, 12000, rng);
+  Eigen::SparseMatrix<double> p = randomSparse(3000, 40, 300, rng);
+  for (int r = 0; r < 3000; ++r) p.coeffRef(r, 7) = 1.0 + r % 5;
+  p.makeCompressed();
+  const Eigen::SparseMatrix<double> reference = Eigen::SparseMatrix<double>(p.transpose()) * a * p;
+  const Eigen::SparseMatrix<double> c = galerkinProduct(a, p);
+  const double largest = largestDifference(c, reference);
+  EXPECT_EQ(c.col(7).nonZeros(), 40);
+  EXPECT_LT(largest, 1e-9);
 }
 
 TEST(Galerkin, KeepsStructuralZerosSoThePatternIgnoresValues) {
@@ -82,8 +103,8 @@ TEST(Galerkin, LatticeProlongationMatchesTheStoredOneBitForBit) {
                            lattice.outerIndexPtr()));
     EXPECT_TRUE(std::equal(stored.innerIndexPtr(), stored.innerIndexPtr() + stored.nonZeros(),
                            lattice.innerIndexPtr()));
-    EXPECT_TRUE(std::equal(stored.valuePtr(), stored.valuePtr() + stored.nonZeros(),
-                           lattice.valuePtr()))
+    EXPECT_TRUE(
+        std::equal(stored.valuePtr(), stored.valuePtr() + stored.nonZeros(), lattice.valuePtr()))
         << "level " << l;
     a = stored;
   }
