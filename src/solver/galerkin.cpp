@@ -25,14 +25,13 @@ using RowMajor = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 /// Coarse columns per task (fixed, so the split does not depend on the thread count).
 constexpr Eigen::Index kColumnsPerTask = 2048;
 
-/// Sums of values by index for the few indices one column touches, in the order first touched:
-/// open addressing with linear probing in a table at most half full, emptied through the list of
-/// touched slots. Its size follows one column's entries, not the matrix's order, so a thread's
-/// accumulators stay small at any texture size (dense ones over the fine unknowns held 12 bytes
-/// per fine unknown per thread, docs/memory.md).
+/// Sums of values by index for the few indices one column touches, in the order first touched,
+/// by open addressing with linear probing in a table at most half full: sized by one column's
+/// entries, not by the matrix's order, so a thread's accumulators stay small at any texture size
+/// (dense ones over the fine unknowns held 12 bytes per fine unknown per thread, docs/memory.md).
 class Accumulator {
  public:
-  /// Adds v to the sum at index i (i >= 0).
+  /// Adds v to the sum at index i (i >= 0: -1 marks an empty slot).
   void add(int i, double v) {
     size_t s = slotOf(i);
     while (keys_[s] != i) {
@@ -56,9 +55,8 @@ class Accumulator {
   }
 
  private:
-  size_t slotOf(int i) const {  // Fibonacci hashing: the top bits of i times 2^32 / phi
-    return (static_cast<uint32_t>(i) * 2654435769u) >> (32 - bits_);
-  }
+  /// Fibonacci hashing: the top bits_ bits of i times 2^32 / phi.
+  size_t slotOf(int i) const { return (static_cast<uint32_t>(i) * 2654435769u) >> (32 - bits_); }
   /// The first empty slot from i's own (i not in the table).
   size_t emptySlotFor(int i) const {
     size_t s = slotOf(i);
@@ -94,10 +92,11 @@ class Accumulator {
     }
     touched_ = std::move(touched);
   }
-  int bits_ = 6;
-  size_t mask_ = (size_t(1) << 6) - 1;
-  std::vector<int> keys_ = std::vector<int>(size_t(1) << 6, -1);  ///< -1: an empty slot
-  std::vector<double> sums_ = std::vector<double>(size_t(1) << 6, 0.0);
+  static constexpr int kFirstBits = 6;           ///< a first table of 64 slots holds most columns
+  int bits_ = kFirstBits;                        ///< log2 of the table's size
+  size_t mask_ = (size_t(1) << kFirstBits) - 1;  ///< the table's size - 1
+  std::vector<int> keys_ = std::vector<int>(size_t(1) << kFirstBits, -1);  ///< -1: empty slot
+  std::vector<double> sums_ = std::vector<double>(size_t(1) << kFirstBits, 0.0);
   std::vector<size_t> touched_;  ///< slots in the order first touched
 };
 
@@ -110,7 +109,7 @@ struct Block {
 
 /// Frees a block's storage, letting the system drop its pages first: a block of the heap freed
 /// in the middle of it would otherwise stay resident beside the result it was copied into.
-void release(Block& block) {
+void releaseBlock(Block& block) {
   detail::discardWholePages(block.inner.data(), block.inner.size() * sizeof(int));
   detail::discardWholePages(block.values.data(), block.values.size() * sizeof(double));
   block = Block();
@@ -165,11 +164,11 @@ Sparse galerkinColumns(Rows rowOf, Eigen::Index nc, Children children, Parents p
     out.inner.assign(block.inner.begin(), block.inner.end());
     out.values.assign(block.values.begin(), block.values.end());
   });
-  scratch.clear();
+  scratch.clear();  // the threads' accumulators and blocks go before the result is allocated
   Sparse c(nc, nc);
   Eigen::Index nonZeros = 0;
   for (const Block& block : blocks) nonZeros += static_cast<Eigen::Index>(block.inner.size());
-  c.resizeNonZeros(nonZeros);  // not yet written, so not yet resident
+  c.resizeNonZeros(nonZeros);  // resident only as written, or where it reuses resident memory
   int* outer = c.outerIndexPtr();
   outer[0] = 0;
   Eigen::Index column = 0;
@@ -185,7 +184,7 @@ Sparse galerkinColumns(Rows rowOf, Eigen::Index nc, Children children, Parents p
     const int offset = outer[t * kColumnsPerTask];
     std::copy(block.inner.begin(), block.inner.end(), c.innerIndexPtr() + offset);
     std::copy(block.values.begin(), block.values.end(), c.valuePtr() + offset);
-    release(block);
+    releaseBlock(block);
   });
   return c;
 }
