@@ -301,24 +301,15 @@ void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& sys
     const int u = unknownOfBoundary(level, system, j);
     int64_t off = rows.ptr[sj], on = off + system.offBlockEnd[sj];
     system.offBlockEnd[sj] = on;
-    int64_t diagonal = -1;  // where the row's diagonal goes in rows.val
-    bool roundedDiagonal = false;
-    double others = 0.0;
     for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
       const int row = a.inner()[e];
       int64_t& out = system.boundaryIndex.contains(row) ? on : off;
-      if (row == u) {
-        diagonal = out;
-        roundedDiagonal = a.rounded(e);
-      } else {
-        others += a.value(e);
-      }
       rows.col[static_cast<size_t>(out)] = level.slotOfUnknown[static_cast<size_t>(row)];
-      rows.val[static_cast<size_t>(out++)] = a.value(e);
+      rows.val[static_cast<size_t>(out++)] =
+          row == u && a.rounded(e) && !rowSums.empty()
+              ? a.diagonalFromRowSum(u, rowSums[static_cast<size_t>(u)])
+              : a.value(e);
     }
-    if (!rowSums.empty() && roundedDiagonal)
-      rows.val[static_cast<size_t>(diagonal)] =
-          static_cast<double>(rowSums[static_cast<size_t>(u)]) - others;
   });
   assignInteriorNextToBoundary(level, a, system);
 }

@@ -86,21 +86,21 @@ Eigen::SparseMatrix<double> SparseSum::toMatrix() const {
   return m;
 }
 
+double SparseSum::diagonalFromRowSum(int u, double rowSum) const {
+  double others = 0.0;
+  for (int e = outer()[u]; e != outer()[u + 1]; ++e)
+    if (inner()[e] != u) others += value(e);
+  return rowSum - others;
+}
+
 Eigen::SparseMatrix<double> formedMatrix(const FloatSystem& a) {
-  Eigen::SparseMatrix<double> m = SparseSum(a).toMatrix();
+  const SparseSum sum(a);
+  Eigen::SparseMatrix<double> m = sum.toMatrix();
   const std::span<const float> rowSums = a.rowSums();
-  for (int u = 0; u < m.outerSize(); ++u) {
-    double others = 0.0;
-    int64_t diagonal = -1;
-    for (int e = m.outerIndexPtr()[u]; e < m.outerIndexPtr()[u + 1]; ++e) {
-      if (m.innerIndexPtr()[e] == u)
-        diagonal = e;
-      else
-        others += m.valuePtr()[e];
-    }
-    if (diagonal >= 0 && !a.exact(diagonal))
-      m.valuePtr()[diagonal] = static_cast<double>(rowSums[static_cast<size_t>(u)]) - others;
-  }
+  for (int u = 0; u < m.outerSize(); ++u)
+    for (int e = m.outerIndexPtr()[u]; e < m.outerIndexPtr()[u + 1]; ++e)
+      if (m.innerIndexPtr()[e] == u && sum.rounded(e))
+        m.valuePtr()[e] = sum.diagonalFromRowSum(u, rowSums[static_cast<size_t>(u)]);
   return m;
 }
 

@@ -122,6 +122,14 @@ struct AssembledAndDeferred {
   TexelOperators assembled;
 };
 
+/// Expects the visitor to have seen each column once and `assembled`'s M and S bit for bit.
+void expectVisitedAsAssembled(const VisitedColumns& seen, const TexelOperators& assembled,
+                              bool deferred) {
+  EXPECT_EQ(seen.wrongVisits(), 0) << "deferred " << deferred;
+  EXPECT_TRUE(identical(seen.mass, assembled.mass())) << "deferred " << deferred;
+  EXPECT_TRUE(identical(seen.stiffness, assembled.stiffness())) << "deferred " << deferred;
+}
+
 /// Assembles `mesh` at resolution x resolution first (assembledOnce), and deferred to the
 /// visiting screenedSystem, and expects the visitor to see M and S bit for bit, each column once,
 /// and the same alpha M + S (+ alpha lambda C); also for operators assembled first.
@@ -136,10 +144,7 @@ void expectDeferredMatchesAssembled(const TexturedMesh& mesh, int resolution,
     VisitedColumns seen(both.assembled.mass());
     const SparseMatrixd system =
         TexelOperators::screenedSystem(std::move(operators), kAlpha, seen.visitor());
-    EXPECT_EQ(seen.wrongVisits(), 0) << "deferred " << built.deferAssembly;
-    EXPECT_TRUE(identical(seen.mass, both.assembled.mass())) << "deferred " << built.deferAssembly;
-    EXPECT_TRUE(identical(seen.stiffness, both.assembled.stiffness()))
-        << "deferred " << built.deferAssembly;
+    expectVisitedAsAssembled(seen, both.assembled, built.deferAssembly);
     EXPECT_TRUE(identical(system, both.assembled.screenedSystem(kAlpha)))
         << "deferred " << built.deferAssembly;
   }
@@ -215,10 +220,7 @@ void expectFloatSystemRoundsTheDoubleOne(const TexturedMesh& mesh, int resolutio
     VisitedColumns seen(both.assembled.mass());
     const FloatSystem f =
         TexelOperators::screenedSystemInFloat(std::move(operators), kAlpha, seen.visitor());
-    EXPECT_EQ(seen.wrongVisits(), 0) << "deferred " << built.deferAssembly;
-    EXPECT_TRUE(identical(seen.mass, both.assembled.mass())) << "deferred " << built.deferAssembly;
-    EXPECT_TRUE(identical(seen.stiffness, both.assembled.stiffness()))
-        << "deferred " << built.deferAssembly;
+    expectVisitedAsAssembled(seen, both.assembled, built.deferAssembly);
     expectRounded(f, reference, exact, built.deferAssembly ? "deferred" : "assembled first");
   }
 }

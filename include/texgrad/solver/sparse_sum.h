@@ -73,6 +73,9 @@ class SparseSum {
   }
   /// True if entry e is a FloatSystem's entry rounded to float (not one it keeps exact).
   bool rounded(Eigen::Index e) const { return floatSystem_ && !floatSystem_->exact(e); }
+  /// The diagonal of column u that makes its entries sum to `rowSum`: rowSum minus its other
+  /// entries, summed in column order (a rounded diagonal of a FloatSystem's row).
+  double diagonalFromRowSum(int u, double rowSum) const;
   /// The sum as a matrix (for the direct solver of a one-level hierarchy).
   Eigen::SparseMatrix<double> toMatrix() const;
 
