@@ -122,7 +122,7 @@ std::vector<Eigen::MatrixXf> screenedRightHandSide(const TexelOperators& ops, co
 /// channel, and the bound on barely covered texels, which reads M.
 struct ScreenedProblem {
   Eigen::SparseMatrix<double> system;
-  FloatSystem floatSystem;  ///< A instead of `system`, for a solver that takes it
+  FloatSystem floatSystem;           ///< A instead of `system`, for a solver that takes it
   std::vector<Eigen::MatrixXf> rhs;  ///< n x 1 each
   BarelyCoveredNeighbours barely;
 };
@@ -298,8 +298,8 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
     // From here on only A is needed: formed in M's storage when the operators are ours, which
     // frees S with them (`ops` is not used again); rounded as screenColumnByColumn forms it
     // where the solver takes that, so every filter solves one system.
-    const bool rounded = SystemSolver::takesFloatSystem(options.solver) &&
-                         ops.options().seamContinuityWeight == 0.0;
+    const bool rounded =
+        SystemSolver::takesFloatSystem(options.solver) && ops.options().seamContinuityWeight == 0.0;
     const std::vector<uint8_t> exact = rounded ? ops.exactUnknowns() : std::vector<uint8_t>();
     Eigen::SparseMatrix<double> system =
         owned ? TexelOperators::screenedSystem(std::move(owned), options.alpha)
@@ -338,18 +338,29 @@ FilterResult filterOnce(const TexelDomain& domain, const TexelOperators& ops,
   result.updateSeconds = solver->updateSeconds();
   result.solverStorageBytes = solver->storageBytes();
   solver.reset();
+  if (levels) {
+    texture.pixels = valuesOfByteLevels(*levels);
+    levels.reset();
+  }
+  if (!options.normalMap) {
+    // A channel at a time into the texture: the bound treats channels apart, so this is the
+    // whole-block result's bits without a double copy of every channel (8 bytes per value).
+    for (size_t k = 0; k < solved.size(); ++k) {
+      Eigen::MatrixXd channel = solved[k].cast<double>();
+      solved[k] = Eigen::MatrixXf();
+      boundBarelyCovered(barely, barelyX0.col(static_cast<Eigen::Index>(k)), channel);
+      scatterTexelChannel(domain.grid(), channel.col(0), static_cast<int>(k), texture);
+    }
+    result.image = std::move(texture);
+    return result;
+  }
   Eigen::MatrixXd x(domain.unknowns(), x0.channels());
   for (size_t k = 0; k < solved.size(); ++k) {
     x.col(static_cast<Eigen::Index>(k)) = solved[k].cast<double>();
     solved[k] = Eigen::MatrixXf();
   }
   boundBarelyCovered(barely, barelyX0, x);
-  if (levels) {
-    texture.pixels = valuesOfByteLevels(*levels);
-    levels.reset();
-  }
-  result.image =
-      filteredImage(domain.grid(), std::move(texture), std::move(decoded), options.normalMap, x);
+  result.image = filteredImage(domain.grid(), std::move(texture), std::move(decoded), true, x);
   return result;
 }
 

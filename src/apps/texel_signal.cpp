@@ -2,6 +2,7 @@
 #include "texgrad/apps/texel_signal.h"
 
 #include <algorithm>
+#include <string>
 
 #include "texgrad/core/error.h"
 #include "texgrad/io/image_sampling.h"
@@ -35,12 +36,20 @@ Eigen::MatrixXd gatherTexels(const TexelGrid& grid, const Image& image) {
 void scatterTexels(const TexelGrid& grid, const Eigen::MatrixXd& values, Image& image) {
   if (values.rows() != grid.unknownCount() || values.cols() != image.channels)
     throw InvalidInputError("scatterTexels: value block has the wrong shape");
+  for (int c = 0; c < image.channels; ++c) scatterTexelChannel(grid, values.col(c), c, image);
+}
+
+void scatterTexelChannel(const TexelGrid& grid, const Eigen::Ref<const Eigen::VectorXd>& values,
+                         int c, Image& image) {
+  if (values.size() != grid.unknownCount() || c < 0 || c >= image.channels)
+    throw InvalidInputError("scatterTexelChannel: " + std::to_string(values.size()) +
+                            " values for channel " + std::to_string(c) + " of " +
+                            std::to_string(image.channels) + "; expected " +
+                            std::to_string(grid.unknownCount()) + " for a channel of the image");
   for (int u = 0; u < grid.unknownCount(); ++u) {
     const int t = grid.texelOfUnknown[u];
     const int x = t % grid.nx, y = t / grid.nx;
-    if (!grid.inImage(x, y)) continue;
-    for (int c = 0; c < image.channels; ++c)
-      image.at(x + grid.x0, y + grid.y0, c) = static_cast<float>(values(u, c));
+    if (grid.inImage(x, y)) image.at(x + grid.x0, y + grid.y0, c) = static_cast<float>(values(u));
   }
 }
 

@@ -130,14 +130,6 @@ std::string describeContent(std::span<const unsigned char> bytes) {
   return "unrecognised binary data";
 }
 
-/// OpenImageIO messages may span lines; texgrad errors are one line.
-std::string oneLine(std::string message) {
-  for (char& c : message)
-    if (c == '\n' || c == '\r') c = ' ';
-  while (!message.empty() && message.back() == ' ') message.pop_back();
-  return message.empty() ? std::string("unknown OpenImageIO error") : message;
-}
-
 PixelFormat formatOf(OIIO::TypeDesc type) {
   switch (type.basetype) {
     case OIIO::TypeDesc::UINT8:
@@ -328,25 +320,6 @@ FileKind writableKind(const std::filesystem::path& path) {
   return kind;
 }
 
-/// Texel-order floats to file-order samples of type T: clamped to [0, 1] and rounded to the
-/// nearest level for integer T (NaN becomes 0), copied unchanged for float.
-template <typename T>
-std::vector<T> fileOrderSamples(const Image& image) {
-  std::vector<T> out(image.pixels.size());
-  for (size_t k = 0; k < out.size(); ++k) {
-    const float v = image.pixels[k];
-    if constexpr (std::is_integral_v<T>) {
-      constexpr float levels = static_cast<float>(std::numeric_limits<T>::max());
-      const float clamped = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-      out[k] = static_cast<T>(std::lround(clamped * levels));
-    } else {
-      out[k] = v;
-    }
-  }
-  flipRows(out, image.width, image.height, image.channels);
-  return out;
-}
-
 void encode(const std::filesystem::path& temporary, const std::filesystem::path& target,
             const Image& image, PixelFormat format) {
   const std::string where = "cannot write " + target.string() + ": ";
@@ -354,20 +327,7 @@ void encode(const std::filesystem::path& temporary, const std::filesystem::path&
   if (!output) throw IoError(where + oneLine(OIIO::geterror()));
   if (!output->open(temporary.string(), outputSpec(image, typeOf(format))))
     throw IoError(where + oneLine(output->geterror()));
-  bool ok = false;
-  switch (format) {
-    case PixelFormat::UInt8:
-      ok = output->write_image(OIIO::TypeDesc::UINT8, fileOrderSamples<uint8_t>(image).data());
-      break;
-    case PixelFormat::UInt16:
-      ok = output->write_image(OIIO::TypeDesc::UINT16, fileOrderSamples<uint16_t>(image).data());
-      break;
-    case PixelFormat::Half:  // OpenImageIO rounds float to half
-    case PixelFormat::Float:
-      ok = output->write_image(OIIO::TypeDesc::FLOAT, fileOrderSamples<float>(image).data());
-      break;
-  }
-  if (!ok) {
+  if (!writeScanlines(*output, image, typeOf(format))) {
     const std::string message = oneLine(output->geterror());
     output->close();
     throw IoError(where + message);
@@ -504,6 +464,53 @@ OIIO::ImageSpec outputSpec(const Image& image, OIIO::TypeDesc type) {
   spec.alpha_channel = (image.channels == 2 || image.channels == 4) ? image.channels - 1 : -1;
   spec.attribute("oiio:UnassociatedAlpha", 1);
   return spec;
+}
+
+// OpenImageIO messages may span lines; texgrad errors are one line.
+std::string oneLine(std::string message) {
+  for (char& c : message)
+    if (c == '\n' || c == '\r') c = ' ';
+  while (!message.empty() && message.back() == ' ') message.pop_back();
+  return message.empty() ? std::string("unknown OpenImageIO error") : message;
+}
+
+namespace {
+
+/// Rows per strip of writeScanlines: 64 rows of a 16384-wide RGBA float image are 16 MB.
+constexpr int kStripRows = 64;
+
+/// Writes the file rows [0, height) of `image` as samples of type T, a strip at a time.
+template <typename T>
+bool writeStrips(OIIO::ImageOutput& output, const Image& image, OIIO::TypeDesc type) {
+  const size_t row = static_cast<size_t>(image.width) * static_cast<size_t>(image.channels);
+  std::vector<T> strip(row * static_cast<size_t>(std::min(kStripRows, image.height)));
+  for (int first = 0; first < image.height; first += kStripRows) {
+    const int end = std::min(first + kStripRows, image.height);
+    for (int y = first; y < end; ++y) {
+      // File row y (top first) is texel row height - 1 - y (texel rows go upward).
+      const float* from = image.pixels.data() + static_cast<size_t>(image.height - 1 - y) * row;
+      T* to = strip.data() + static_cast<size_t>(y - first) * row;
+      for (size_t k = 0; k < row; ++k) {
+        if constexpr (std::is_integral_v<T>) {
+          constexpr float levels = static_cast<float>(std::numeric_limits<T>::max());
+          const float clamped = std::isnan(from[k]) ? 0.0f : std::clamp(from[k], 0.0f, 1.0f);
+          to[k] = static_cast<T>(std::lround(clamped * levels));
+        } else {
+          to[k] = from[k];
+        }
+      }
+    }
+    if (!output.write_scanlines(first, end, 0, type, strip.data())) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool writeScanlines(OIIO::ImageOutput& output, const Image& image, OIIO::TypeDesc type) {
+  if (type == OIIO::TypeDesc::UINT8) return writeStrips<uint8_t>(output, image, type);
+  if (type == OIIO::TypeDesc::UINT16) return writeStrips<uint16_t>(output, image, type);
+  return writeStrips<float>(output, image, OIIO::TypeDesc::FLOAT);  // OpenImageIO converts
 }
 
 }  // namespace texgrad

@@ -20,30 +20,6 @@ namespace {
 /// Largest channel count a PNG holds (grey, grey + alpha, RGB, RGBA).
 constexpr int kMaxChannels = 4;
 
-/// Texel-order floats to file-order (top row first) integer samples, clamped and rounded.
-template <typename T>
-std::vector<T> fileOrderSamples(const Image& image) {
-  constexpr float levels = static_cast<float>(std::numeric_limits<T>::max());
-  const size_t row = static_cast<size_t>(image.width) * static_cast<size_t>(image.channels);
-  std::vector<T> out(image.pixels.size());
-  for (size_t j = 0; j < static_cast<size_t>(image.height); ++j) {
-    const size_t from = j * row, to = (static_cast<size_t>(image.height) - 1 - j) * row;
-    for (size_t k = 0; k < row; ++k) {
-      const float v = image.pixels[from + k];
-      const float clamped = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-      out[to + k] = static_cast<T>(std::lround(clamped * levels));
-    }
-  }
-  return out;
-}
-
-std::string oneLine(std::string message) {
-  for (char& c : message)
-    if (c == '\n' || c == '\r') c = ' ';
-  while (!message.empty() && message.back() == ' ') message.pop_back();
-  return message.empty() ? std::string("unknown OpenImageIO error") : message;
-}
-
 }  // namespace
 
 /// Encodes `image` as PNG bytes in memory: 8-bit for UInt8, 16-bit for the other formats.
@@ -61,11 +37,7 @@ std::vector<unsigned char> encodePng(const Image& image, PixelFormat format,
   spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxyPointer);
   if (!output->set_ioproxy(&proxy) || !output->open(proxyName, spec))
     throw IoError(where + oneLine(output->geterror()));
-  const bool ok =
-      sixteenBit
-          ? output->write_image(OIIO::TypeDesc::UINT16, fileOrderSamples<uint16_t>(image).data())
-          : output->write_image(OIIO::TypeDesc::UINT8, fileOrderSamples<uint8_t>(image).data());
-  if (!ok) {
+  if (!writeScanlines(*output, image, spec.format)) {
     const std::string message = oneLine(output->geterror());
     output->close();
     throw IoError(where + message);

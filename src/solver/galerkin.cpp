@@ -287,31 +287,31 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
   const auto unknownOf = [&](int64_t slot) {
     return fine.unknownOfSlot[static_cast<size_t>(slot)];
   };
-  // Per box: index in boxRows of its first run with interior slots, and that run's lattice y
-  // (a box's runs are consecutive rows from there, LevelSystem::boxRows).
-  std::vector<std::pair<int64_t, int>> firstRun(fine.boxes.size(), {-1, 0});
+  // Per box: index in boxRows of its first row and that row's lattice y (a box's rows are
+  // consecutive from there, LevelSystem::boxRows).
+  std::vector<std::pair<int64_t, int>> firstRow(fine.boxes.size(), {-1, 0});
   for (size_t k = 0; k < system.boxRows.size(); ++k) {
-    const SlotRow& run = system.boxRows[k];
-    if (run.begin == run.end) continue;
-    const LatticePoint p = fine.pointOfSlot(run.begin);
-    auto& first = firstRun[static_cast<size_t>(p.box)];
-    if (first.first < 0) first = {static_cast<int64_t>(k), p.y};
+    auto& first = firstRow[static_cast<size_t>(system.boxRows[k].box)];
+    if (first.first < 0) first = {static_cast<int64_t>(k), system.boxRows[k].y};
   }
   const auto rowOf = [&](int r, const auto& f) {
     const int64_t s = fine.slotOfUnknown[static_cast<size_t>(r)];
     if (system.kind[static_cast<size_t>(s)] == SlotKind::Interior) {
-      // The run holding slot s, its colour q and index i.
+      // The row holding slot s and the row above it, which stores s's couplings up.
       const LatticePoint p = fine.point(r);
-      const auto& [first, y0] = firstRun[static_cast<size_t>(p.box)];
-      const SlotRow& run = system.boxRows[static_cast<size_t>(first + p.y - y0)];
-      const int q = static_cast<int>((s - run.begin) & 1);
-      const int64_t n = run.runLength(q), i = (s - run.begin) / 2;
-      const T* w = stencils.data() + run.coeffsOf(q);
+      const auto& [first, y0] = firstRow[static_cast<size_t>(p.box)];
+      const size_t i = static_cast<size_t>(first + p.y - y0);
+      const SlotRow& row = system.boxRows[i];
+      const SlotRow& above = system.boxRows[i - 1];
       double off = 0.0;
       for (int k = 0; k < 9; ++k) {  // stencil index k = (dy + 1) * 3 + (dx + 1)
-        const int v = unknownOf(s + (k / 3 - 1) * int64_t(run.width) + (k % 3 - 1));
+        const int64_t t = s + (k / 3 - 1) * int64_t(row.width) + (k % 3 - 1);
+        const int v = unknownOf(t);
         if (k == 4 || v < 0) continue;  // (A has no entry at an empty slot)
-        const double value = static_cast<double>(w[k * n + i]);
+        const int64_t at = k > 4    ? row.coefficient(s, forwardPlane(k))
+                           : k == 3 ? row.coefficient(t, forwardPlane(8 - k))
+                                    : above.coefficient(t, forwardPlane(8 - k));
+        const double value = static_cast<double>(stencils[static_cast<size_t>(at)]);
         off += value;
         f(v, value);
       }

@@ -30,70 +30,101 @@ namespace texgrad::detail {
 /// Rows per TBB task in grid loops (a row is a few hundred to a few thousand slots).
 constexpr size_t kRowGrain = 4;
 
-/// Sum of the 8 off-centre stencil terms at slot 2i of a colour run (fixed association order,
-/// so every channel count and thread count rounds alike). up / mid / down point at the run's
-/// first slot in the rows y - 1, y, y + 1 of one channel plane.
+/// Sum of the 8 off-centre stencil terms w_k x_k at slot 2i of a colour run (fixed association
+/// order, so every channel count and thread count rounds alike). up / mid / down point at the
+/// run's first slot in the rows y - 1, y, y + 1 of one channel plane; wk[i] is weight k (index
+/// (dy + 1) * 3 + (dx + 1)) of run slot i. Always inlined: GCC 12 leaves the calling loop scalar
+/// when it inlines this late (measured: relaxation twice as slow).
 template <typename T>
-inline T offCentreSum(const T* w, int64_t n, int64_t i, const T* up, const T* mid, const T* down) {
+[[gnu::always_inline]] inline T offCentreSum(int64_t i, const T* w0, const T* w1, const T* w2,
+                                             const T* w3, const T* w5, const T* w6, const T* w7,
+                                             const T* w8, const T* up, const T* mid,
+                                             const T* down) {
   const int64_t j = 2 * i;
-  return ((w[i] * up[j - 1] + w[n + i] * up[j]) +
-          (w[2 * n + i] * up[j + 1] + w[3 * n + i] * mid[j - 1])) +
-         ((w[5 * n + i] * mid[j + 1] + w[6 * n + i] * down[j - 1]) +
-          (w[7 * n + i] * down[j] + w[8 * n + i] * down[j + 1]));
+  return ((w0[i] * up[j - 1] + w1[i] * up[j]) + (w2[i] * up[j + 1] + w3[i] * mid[j - 1])) +
+         ((w5[i] * mid[j + 1] + w6[i] * down[j - 1]) + (w7[i] * down[j] + w8[i] * down[j + 1]));
 }
 
-/// Gauss–Seidel on one colour run of one channel plane:
-/// x_s = (b_s - sum_{k != centre} w_k x_k) / w_centre where the mask plane is non-zero. `mid` and
-/// `x` alias the same row but touch disjoint slots (x the colour being relaxed, mid its
-/// neighbours of the other colour).
+/// Gauss–Seidel on n slots of a colour run of one channel plane:
+/// x_s = (b_s - sum_{k != centre} w_k x_k) / w_centre where the mask (inverse) is non-zero. `mid`
+/// and `x` alias the same row but touch disjoint slots (x the colour being relaxed, mid its
+/// neighbours of the other colour). Every pointer is a parameter of its own, restrict-qualified,
+/// so that the loop vectorises without run-time alias checks.
 template <typename T>
-TEXGRAD_SIMD_CLONES void relaxRun(int64_t n, const T* __restrict w, const T* __restrict b,
-                                  const T* __restrict up, const T* __restrict mid,
-                                  const T* __restrict down, T* __restrict x) {
-  const T* inverse = w + kInverseDiagonal * n;
+[[gnu::always_inline]] inline void relaxSlots(
+    int64_t n, const T* __restrict w0, const T* __restrict w1, const T* __restrict w2,
+    const T* __restrict w3, const T* __restrict w5, const T* __restrict w6, const T* __restrict w7,
+    const T* __restrict w8, const T* __restrict inverse, const T* __restrict b,
+    const T* __restrict up, const T* __restrict mid, const T* __restrict down, T* __restrict x) {
   for (int64_t i = 0; i < n; ++i) {
     const int64_t j = 2 * i;
-    const T value = inverse[i] * (b[j] - offCentreSum(w, n, i, up, mid, down));
+    const T sum = offCentreSum(i, w0, w1, w2, w3, w5, w6, w7, w8, up, mid, down);
+    const T value = inverse[i] * (b[j] - sum);
     const T old = x[j];
     x[j] = value + (inverse[i] == T(0) ? old : T(0));  // select by addition: vectorises
   }
 }
 
-/// relaxRun on the run of colour q in `row`, for each of the k channel planes of `plane` slots
-/// (channel c of slot s at c * plane + s); the run's stencils stay in cache across channels.
+/// relaxSlots on a run whose weights `w` gives.
 template <typename T>
-void relaxRowColour(const SlotRow& row, int q, const T* stencil, const T* b, T* x, int k,
-                    int64_t plane) {
-  const int64_t n = row.runLength(q);
-  if (n <= 0) return;
-  const int64_t w = row.width;
-  const T* coeffs = stencil + row.coeffsOf(q);
-  for (int c = 0; c < k; ++c) {
-    const int64_t s0 = c * plane + row.begin + q;
-    relaxRun<T>(n, coeffs, b + s0, x + s0 - w, x + s0, x + s0 + w, x + s0);
-  }
+TEXGRAD_SIMD_CLONES void relaxRun(int64_t n, const RunStencil<T>& w, const T* b, const T* up,
+                                  const T* mid, const T* down, T* x) {
+  relaxSlots(n, w.w[0], w.w[1], w.w[2], w.w[3], w.w[5], w.w[6], w.w[7], w.w[8], w.inverse, b, up,
+             mid, down, x);
 }
 
-/// r = b - A x on the slots of one colour run of one channel plane, 0 where the mask plane is 0.
+/// r = b - A x on n slots of a colour run of one channel plane, 0 where the mask is 0.
 template <typename T>
-TEXGRAD_SIMD_CLONES void residualRun(int64_t n, const T* __restrict w, const T* __restrict b,
-                                     const T* __restrict up, const T* __restrict mid,
-                                     const T* __restrict down, T* __restrict r) {
-  const T* inverse = w + kInverseDiagonal * n;
+[[gnu::always_inline]] inline void residualSlots(int64_t n, const T* __restrict w0,
+                                                 const T* __restrict w1, const T* __restrict w2,
+                                                 const T* __restrict w3, const T* __restrict w4,
+                                                 const T* __restrict w5, const T* __restrict w6,
+                                                 const T* __restrict w7, const T* __restrict w8,
+                                                 const T* __restrict inverse, const T* __restrict b,
+                                                 const T* __restrict up, const T* __restrict mid,
+                                                 const T* __restrict down, T* __restrict r) {
   for (int64_t i = 0; i < n; ++i) {
     const int64_t j = 2 * i;
-    const T value = b[j] - (offCentreSum(w, n, i, up, mid, down) + w[4 * n + i] * mid[j]);
+    const T sum = offCentreSum(i, w0, w1, w2, w3, w5, w6, w7, w8, up, mid, down);
+    const T value = b[j] - (sum + w4[i] * mid[j]);
     r[j] = inverse[i] == T(0) ? T(0) : value;
   }
 }
 
-/// r = b - A x on both colours of one run, every channel plane; 0 on masked slots.
+/// residualSlots on a run whose weights `w` gives.
 template <typename T>
-void residualRow(const SlotRow& row, const T* stencil, const T* b, const T* x, T* r, int k,
-                 int64_t plane) {
+TEXGRAD_SIMD_CLONES void residualRun(int64_t n, const RunStencil<T>& w, const T* b, const T* up,
+                                     const T* mid, const T* down, T* r) {
+  residualSlots(n, w.w[0], w.w[1], w.w[2], w.w[3], w.w[4], w.w[5], w.w[6], w.w[7], w.w[8],
+                w.inverse, b, up, mid, down, r);
+}
+
+/// relaxRun on the slots of colour q of box row i, for each of the k channel planes (channel c
+/// of slot s at c * slotCount + s); the run's stencils stay in cache across channels.
+template <typename T>
+void relaxRowColour(const LevelSystem& sys, int64_t i, int q, const T* stencil, const T* b, T* x,
+                    int k) {
+  const SlotRow& row = sys.boxRows[static_cast<size_t>(i)];
+  const int64_t n = row.runLength(q);
+  if (n <= 0) return;
+  const RunStencil<T> w = runStencil(stencil, sys.boxRows[static_cast<size_t>(i) - 1], row, q);
+  const int64_t width = row.width, plane = sys.slotCount();
+  for (int c = 0; c < k; ++c) {
+    const int64_t s0 = c * plane + row.begin + q;
+    relaxRun<T>(n, w, b + s0, x + s0 - width, x + s0, x + s0 + width, x + s0);
+  }
+}
+
+/// r = b - A x on both colours of box row i, every channel plane; 0 on masked slots.
+template <typename T>
+void residualRow(const LevelSystem& sys, int64_t i, const T* stencil, const T* b, const T* x, T* r,
+                 int k) {
+  const SlotRow& row = sys.boxRows[static_cast<size_t>(i)];
+  const int64_t plane = sys.slotCount();
   for (int q = 0; q < 2; ++q) {
     const int64_t n = row.runLength(q);
-    const T* w = stencil + row.coeffsOf(q);
+    if (n <= 0) continue;
+    const RunStencil<T> w = runStencil(stencil, sys.boxRows[static_cast<size_t>(i) - 1], row, q);
     for (int c = 0; c < k; ++c) {
       const int64_t s0 = c * plane + row.begin + q;
       residualRun<T>(n, w, b + s0, x + s0 - row.width, x + s0, x + s0 + row.width, r + s0);
@@ -107,10 +138,9 @@ template <typename T>
 void relaxNode(const LevelSystem& sys, int64_t i, int h, bool forward, const T* stencil, const T* b,
                T* x, int k) {
   const SlotRow& row = sys.boxRows[static_cast<size_t>(i)];
-  if (row.begin == row.end || row.yParity != (forward ? (h & 1) : 1 - (h & 1))) return;
+  if (row.begin == row.end || row.yParity() != (forward ? (h & 1) : 1 - (h & 1))) return;
   for (int p = 0; p < 2; ++p)
-    relaxRowColour<T>(row, ((forward ? p : 1 - p) ^ row.xParity) & 1, stencil, b, x, k,
-                      sys.slotCount());
+    relaxRowColour<T>(sys, i, ((forward ? p : 1 - p) ^ row.xParity) & 1, stencil, b, x, k);
 }
 
 /// The half-sweeps [0, halves) of a band that need no row of a neighbouring band: row i at
@@ -131,8 +161,7 @@ void relaxBandInterior(const LevelSystem& sys, const RowBand& band, int halves, 
       relaxNode<T>(sys, i, h, forward, stencil, b, x, k);
     }
     const int64_t ready = step - halves;
-    if (r && ready >= lo && ready < hi)
-      residualRow<T>(sys.boxRows[static_cast<size_t>(ready)], stencil, b, x, r, k, sys.slotCount());
+    if (r && ready >= lo && ready < hi) residualRow<T>(sys, ready, stencil, b, x, r, k);
   }
 }
 
@@ -145,8 +174,7 @@ void relaxBandSeam(const LevelSystem& sys, int64_t m, int halves, bool forward, 
   for (int h = 1; h < halves; ++h)
     for (int64_t i = m - h; i < m + h; ++i) relaxNode<T>(sys, i, h, forward, stencil, b, x, k);
   if (r)
-    for (int64_t i = m - halves; i < m + halves; ++i)
-      residualRow<T>(sys.boxRows[static_cast<size_t>(i)], stencil, b, x, r, k, sys.slotCount());
+    for (int64_t i = m - halves; i < m + halves; ++i) residualRow<T>(sys, i, stencil, b, x, r, k);
 }
 
 /// `sweeps` symmetric-ordered Gauss–Seidel sweeps over all interior slots with boundary values
@@ -179,7 +207,7 @@ void interiorResidual(const LevelSystem& sys, const T* stencil, const T* b, cons
   tbb::parallel_for(tbb::blocked_range<size_t>(0, sys.boxRows.size(), kRowGrain),
                     [&](const tbb::blocked_range<size_t>& range) {
                       for (size_t i = range.begin(); i != range.end(); ++i)
-                        residualRow<T>(sys.boxRows[i], stencil, b, x, r, k, sys.slotCount());
+                        residualRow<T>(sys, static_cast<int64_t>(i), stencil, b, x, r, k);
                     });
 }
 
@@ -199,9 +227,9 @@ void boundaryRowsResidual(const LevelSystem& sys, BoundaryColumns columns, const
                       for (int j = range.begin(); j != range.end(); ++j) {
                         const size_t sj = static_cast<size_t>(j);
                         const int64_t s = sys.boundarySlots[sj];
-                        const int64_t e0 = csr.ptr[sj],
-                                      e1 = columns == BoundaryColumns::All ? csr.ptr[sj + 1]
-                                                                           : sys.offBlockEnd[sj];
+                        const int64_t e0 = csr.ptr[sj], e1 = columns == BoundaryColumns::All
+                                                                 ? csr.ptr[sj + 1]
+                                                                 : sys.offBlockEnd[sj];
                         for (int c = 0; c < k; ++c) {
                           const T* xc = x + c * plane;
                           double acc = static_cast<double>(b[c * plane + s]);

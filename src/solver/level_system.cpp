@@ -99,8 +99,9 @@ void lockNearWeakRows(const GridLevel& level, const SparseSum& a, int reach,
   }
 }
 
-/// Interior run of box row r (an empty run if the row has no interior slot).
-SlotRow interiorRun(const GridBox& box, int r, const LevelSystem& system) {
+/// Row r of `box` with its visited slots, from its first to its last interior slot (none if it
+/// has no interior slot); its stored slots are set by storeRows.
+SlotRow interiorRun(const GridBox& box, int boxIndex, int r, const LevelSystem& system) {
   const int64_t rowStart = box.offset + static_cast<int64_t>(r) * box.width;
   int64_t first = -1, last = -1;
   for (int64_t s = rowStart; s < rowStart + box.width; ++s) {
@@ -108,10 +109,38 @@ SlotRow interiorRun(const GridBox& box, int r, const LevelSystem& system) {
     if (first < 0) first = s;
     last = s;
   }
-  const int y = box.y0 + r;
-  if (first < 0) return {0, 0, box.width, 0, y & 1, 0};
-  const int x = box.x0 + static_cast<int>(first - rowStart);
-  return {first, last + 1, box.width, x & 1, y & 1, system.stencilSize};
+  SlotRow row;
+  row.box = boxIndex;
+  row.width = box.width;
+  row.y = box.y0 + r;
+  if (first < 0) return row;
+  row.begin = first;
+  row.end = last + 1;
+  row.xParity = (box.x0 + static_cast<int>(first - rowStart)) & 1;
+  return row;
+}
+
+/// Sets the stored slots of box rows [first, end) (one box, consecutive rows) and their place in
+/// the stencil array: a row stores its visited slots and the slot before them (their couplings
+/// in the row) and the slots next to the visited slots of the row below (their couplings up).
+/// The box's empty ring keeps every stored slot inside the box row.
+void storeRows(int64_t first, int64_t end, LevelSystem& system) {
+  for (int64_t i = first; i < end; ++i) {
+    SlotRow& row = system.boxRows[static_cast<size_t>(i)];
+    int64_t lo = std::numeric_limits<int64_t>::max(), hi = std::numeric_limits<int64_t>::min();
+    if (row.begin != row.end) lo = row.begin - 1, hi = row.end;
+    if (i + 1 < end) {
+      const SlotRow& below = system.boxRows[static_cast<size_t>(i) + 1];
+      if (below.begin != below.end)
+        lo = std::min(lo, below.begin - row.width - 1),
+        hi = std::max(hi, below.end - row.width + 1);
+    }
+    if (lo > hi) lo = hi = 0;
+    row.storeBegin = lo;
+    row.storeEnd = hi;
+    row.coeffs = system.stencilSize;
+    system.stencilSize += kStencilPlanes * (row.stored(0) + row.stored(1));
+  }
 }
 
 /// Splits box rows [first, end) into bands of about kBandRows rows.
@@ -123,24 +152,30 @@ void addBands(int64_t first, int64_t end, LevelSystem& system) {
 }
 
 void collectRows(const GridLevel& level, LevelSystem& system) {
-  for (int p = 0; p < 2; ++p) system.rows[p].clear();
   system.boxRows.clear();
   system.bands.clear();
   system.stencilSize = 0;
-  for (const GridBox& box : level.boxes) {
+  for (size_t b = 0; b < level.boxes.size(); ++b) {
+    const GridBox& box = level.boxes[b];
     const int64_t boxFirst = static_cast<int64_t>(system.boxRows.size());
     int64_t boxEnd = boxFirst;
     for (int r = 1; r + 1 < box.height; ++r) {
-      const SlotRow row = interiorRun(box, r, system);
-      if (row.begin == row.end && boxEnd == boxFirst) continue;  // before the first interior row
+      const SlotRow row = interiorRun(box, static_cast<int>(b), r, system);
+      const bool interior = row.begin != row.end;
+      // Before the first interior row only the row just before it is kept (it stores the
+      // couplings up to it). An interior slot has its 8 lattice neighbours, unknowns, so neither
+      // it nor they lie on the box's empty ring: the row r = 1 is never interior.
+      if (!interior && boxEnd == boxFirst) system.boxRows.resize(static_cast<size_t>(boxFirst));
       system.boxRows.push_back(row);
-      if (row.begin == row.end) continue;
-      boxEnd = static_cast<int64_t>(system.boxRows.size());
-      system.stencilSize += kStencilPlanes * (row.runLength(0) + row.runLength(1));
-      system.rows[row.yParity].push_back(row);
+      if (interior) boxEnd = static_cast<int64_t>(system.boxRows.size());
     }
     system.boxRows.resize(static_cast<size_t>(boxEnd));  // drop rows after the last interior row
-    if (boxEnd > boxFirst) addBands(boxFirst, boxEnd, system);
+    if (boxEnd == boxFirst) continue;
+    if (system.boxRows[static_cast<size_t>(boxFirst)].begin !=
+        system.boxRows[static_cast<size_t>(boxFirst)].end)
+      throw std::logic_error("multigrid: an interior slot on a box's first row");
+    storeRows(boxFirst, boxEnd, system);
+    addBands(boxFirst, boxEnd, system);
   }
 }
 
@@ -247,7 +282,9 @@ void BoundaryIndex::assign(const std::vector<uint8_t>& interior) {
   }
 }
 
-int64_t BoundaryIndex::storageBytes() const { return capacityBytes(bits_, before_); }
+int64_t BoundaryIndex::storageBytes() const {
+  return capacityBytes(bits_, before_);
+}
 
 void classifyLevel(const GridLevel& level, const SparseSum& pattern, int weakRowReach,
                    LevelSystem& system) {
@@ -374,40 +411,57 @@ void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSyste
   // refills the one it has.
   if (stencils.size() != static_cast<size_t>(system.stencilSize))
     stencils = PageArray<T>(static_cast<size_t>(system.stencilSize), ownPages);
-  auto fillRun = [&](const SlotRow& row, int q) {
-    const int64_t n = row.runLength(q);
-    T* w = stencils.data() + row.coeffsOf(q);
-    std::fill_n(w, kStencilPlanes * n, T(0));
-    for (int64_t i = 0; i < n; ++i) {
-      const int64_t s = row.begin + q + 2 * i;
+  T* w = stencils.data();
+  auto clearRow = [&](const SlotRow& row) {
+    std::fill_n(w + row.coeffs, kStencilPlanes * (row.stored(0) + row.stored(1)), T(0));
+  };
+  // Row s of A at each interior slot s of `row`: its forward couplings and centre into its own
+  // planes, and the other couplings into the neighbour's planes where that neighbour is not
+  // interior (an interior neighbour stores them itself), so every coefficient has one writer.
+  auto fillRow = [&](const SlotRow& above, const SlotRow& row) {
+    for (int64_t s = row.begin; s < row.end; ++s) {
       if (system.kind[static_cast<size_t>(s)] != SlotKind::Interior) continue;
       const int u = level.unknownOfSlot[static_cast<size_t>(s)];
       const Neighbourhood around(level, u);
-      for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e)
-        w[around.stencilIndex(a.inner()[e]) * n + i] = static_cast<T>(a.value(e));
-      const T centre = w[4 * n + i];
+      T centre(0);
+      for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
+        const int k = around.stencilIndex(a.inner()[e]);
+        const T value = static_cast<T>(a.value(e));
+        if (k == 4) {
+          centre = value;
+        } else if (k > 4) {
+          w[row.coefficient(s, forwardPlane(k))] = value;
+        } else {
+          const int64_t t = s + (k / 3 - 1) * int64_t(row.width) + (k % 3 - 1);
+          if (system.kind[static_cast<size_t>(t)] == SlotKind::Interior) continue;
+          const SlotRow& holder = k == 3 ? row : above;
+          w[holder.coefficient(t, forwardPlane(8 - k))] = value;
+        }
+      }
       if (!(centre > T(0)))
         throw NumericalError("multigrid: diagonal entry of unknown " + std::to_string(u) +
                              " is not positive; the system matrix must be positive definite");
-      w[kInverseDiagonal * n + i] = T(1) / centre;
+      w[row.coefficient(s, kCentre)] = centre;
+      w[row.coefficient(s, kInverseDiagonal)] = T(1) / centre;
     }
   };
-  // Every run with its lattice row, upward (the order of the runs of one row does not matter:
-  // each writes its own coefficients).
-  std::vector<std::pair<int, const SlotRow*>> runs;
-  for (const std::vector<SlotRow>& rows : system.rows)
-    for (const SlotRow& row : rows) runs.emplace_back(level.pointOfSlot(row.begin).y, &row);
-  std::sort(runs.begin(), runs.end(),
-            [](const auto& p, const auto& q) { return p.first < q.first; });
-  for (size_t first = 0; first < runs.size();) {
-    const int end = runs[first].first + kStencilBandRows;
+  // Every row with its lattice y, upward. A band's rows are cleared before any is filled: a row
+  // writes into the row before it, which an earlier band or this one holds.
+  std::vector<std::pair<int, size_t>> rows;
+  for (size_t k = 0; k < system.boxRows.size(); ++k) rows.emplace_back(system.boxRows[k].y, k);
+  std::sort(rows.begin(), rows.end());
+  for (size_t first = 0; first < rows.size();) {
+    const int end = rows[first].first + kStencilBandRows;
     size_t last = first;
-    while (last < runs.size() && runs[last].first < end) ++last;
+    while (last < rows.size() && rows[last].first < end) ++last;
+    tbb::parallel_for(first, last, [&](size_t r) { clearRow(system.boxRows[rows[r].second]); });
     tbb::parallel_for(first, last, [&](size_t r) {
-      for (int q = 0; q < 2; ++q) fillRun(*runs[r].second, q);
+      const size_t k = rows[r].second;
+      const SlotRow& row = system.boxRows[k];
+      if (row.begin != row.end) fillRow(system.boxRows[k - 1], row);
     });
     if (consumed)
-      consumed(last == runs.size() ? level.unknownCount() : firstUnknownFrom(level, end));
+      consumed(last == rows.size() ? level.unknownCount() : firstUnknownFrom(level, end));
     first = last;
   }
 }
@@ -418,8 +472,7 @@ template void assignStencils<double>(const GridLevel&, const SparseSum&, const L
                                      PageArray<double>&, bool, const std::function<void(int)>&);
 
 int64_t LevelSystem::storageBytes() const {
-  return capacityBytes(kind, rows[0], rows[1], boxRows, bands, boundarySlots, offBlockEnd,
-                       fixupSlots) +
+  return capacityBytes(kind, boxRows, bands, boundarySlots, offBlockEnd, fixupSlots) +
          boundaryIndex.storageBytes() +
          capacityBytes(boundaryRows.ptr, boundaryRows.col, interiorNextToBoundary.ptr,
                        interiorNextToBoundary.col) +

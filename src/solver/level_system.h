@@ -17,27 +17,74 @@
 
 namespace texgrad::detail {
 
-/// Coefficient planes per slot of a stencil run: the 9 stencil weights, index
-/// (dy + 1) * 3 + (dx + 1), then 1 / w_centre on interior slots and 0 on the others (the mask).
-constexpr int kStencilPlanes = 10;
-/// Plane holding 1 / w_centre (0 marks a slot that relaxation and residuals skip).
-constexpr int kInverseDiagonal = 9;
+/// Coefficient planes per stored slot of a row. A is symmetric, so a coupling is stored once, by
+/// the slot whose forward half it lies in: planes 0 to 3 hold the couplings to (dx, dy) = (+1, 0),
+/// (-1, +1), (0, +1), (+1, +1) (stencil indices 5 to 8, index (dy + 1) * 3 + (dx + 1)); a slot
+/// reads the other half (indices 0 to 3) from the neighbour there, index k from plane 3 - k.
+/// Then the centre and 1 / centre (0 on slots that are not interior: the mask). Ten planes per
+/// slot before (docs/memory.md).
+constexpr int kStencilPlanes = 6;
+/// Plane holding the centre weight A_ss.
+constexpr int kCentre = 4;
+/// Plane holding 1 / A_ss (0 marks a slot that relaxation and residuals skip).
+constexpr int kInverseDiagonal = 5;
+/// Plane of the stored coupling for stencil index k (5 to 8) of the slot that stores it.
+constexpr int forwardPlane(int k) {
+  return k - 5;
+}
 
-/// A run of slots in one box row that contains every interior slot of that row. Its stencils
-/// are stored by colour: the slots begin + q + 2i (q = 0, 1) have kStencilPlanes planes of
-/// runLength(q) coefficients each, q = 0 first, starting at `coeffs` (structure of arrays, so
-/// the relaxation of one colour reads every plane with unit stride).
+/// One lattice row of a box: the slots [begin, end) that relaxation visits, every interior slot
+/// of the row (empty if it has none), and the slots [storeBegin, storeEnd) whose forward
+/// couplings are stored, every one an interior slot of this row or the row below reads. Stored
+/// by colour: the slots storeBegin + c + 2i (c = 0, 1) have kStencilPlanes planes of stored(c)
+/// coefficients each, c = 0 first, starting at `coeffs` (structure of arrays, so the relaxation
+/// of one colour reads every plane with unit stride).
 struct SlotRow {
-  int64_t begin = 0, end = 0;  ///< slot range [begin, end)
-  int width = 0;               ///< width of the box (row stride in slots)
-  int xParity = 0;             ///< parity of the lattice x coordinate of slot `begin`
-  int yParity = 0;             ///< parity of the lattice y coordinate of the row
-  int64_t coeffs = 0;          ///< offset of this run's coefficients in the level's stencil array
-  /// Number of slots begin + q + 2i in the run.
+  int64_t begin = 0, end = 0;            ///< visited slots [begin, end)
+  int64_t storeBegin = 0, storeEnd = 0;  ///< stored slots, containing [begin - 1, end)
+  int box = 0;                           ///< index into GridLevel::boxes
+  int width = 0;                         ///< width of the box (row stride in slots)
+  int xParity = 0;                       ///< parity of the lattice x coordinate of slot `begin`
+  int y = 0;                             ///< lattice y of the row
+  int64_t coeffs = 0;  ///< offset of this row's coefficients in the level's stencil array
+  /// Parity of the lattice y coordinate of the row.
+  int yParity() const { return y & 1; }
+  /// Number of visited slots begin + q + 2i.
   int64_t runLength(int q) const { return (end - begin - q + 1) / 2; }
-  /// Offset of the coefficient planes of colour q.
-  int64_t coeffsOf(int q) const { return coeffs + (q ? kStencilPlanes * runLength(0) : 0); }
+  /// Number of stored slots storeBegin + c + 2i.
+  int64_t stored(int c) const { return (storeEnd - storeBegin - c + 1) / 2; }
+  /// Offset of plane p's coefficient of stored slot t in the level's stencil array; the next
+  /// slot of t's colour (t + 2) has the next offset.
+  int64_t coefficient(int64_t t, int p) const {
+    const int64_t d = t - storeBegin;
+    const int c = static_cast<int>(d & 1);
+    return coeffs + (c ? kStencilPlanes * stored(0) : 0) + p * stored(c) + (d >> 1);
+  }
 };
+
+/// Where the 9 weights and 1 / centre of the visited slots begin + q + 2i of a row are: weight
+/// k of slot i at w[k][i] (0 to 3 in the stored slots of the row itself and the row above, the
+/// row below storing none of them), inverse[i].
+template <typename T>
+struct RunStencil {
+  const T* w[9] = {};
+  const T* inverse = nullptr;
+};
+
+/// The weights of colour q of `row` in `stencils`; `above` is the row before it in its box.
+template <typename T>
+RunStencil<T> runStencil(const T* stencils, const SlotRow& above, const SlotRow& row, int q) {
+  RunStencil<T> r;
+  const int64_t s = row.begin + q;
+  for (int k = 5; k < 9; ++k) r.w[k] = stencils + row.coefficient(s, forwardPlane(k));
+  r.w[4] = stencils + row.coefficient(s, kCentre);
+  r.inverse = stencils + row.coefficient(s, kInverseDiagonal);
+  r.w[3] = stencils + row.coefficient(s - 1, forwardPlane(5));                // (-1, 0)
+  r.w[0] = stencils + above.coefficient(s - row.width - 1, forwardPlane(8));  // (-1, -1)
+  r.w[1] = stencils + above.coefficient(s - row.width, forwardPlane(7));      // (0, -1)
+  r.w[2] = stencils + above.coefficient(s - row.width + 1, forwardPlane(6));  // (+1, -1)
+  return r;
+}
 
 /// Box rows [first, end) of LevelSystem::boxRows relaxed as one cache-sized band; a cut side
 /// borders the next band of the same box (paper §6.2: cache-blocked relaxation).
@@ -65,9 +112,7 @@ class BoundaryIndex {
   /// Marks unknown u as a boundary unknown when interior[u] == 0.
   void assign(const std::vector<uint8_t>& interior);
   /// True if unknown u is a boundary unknown.
-  bool contains(int u) const {
-    return (bits_[static_cast<size_t>(u) >> 6] >> (u & 63)) & 1u;
-  }
+  bool contains(int u) const { return (bits_[static_cast<size_t>(u) >> 6] >> (u & 63)) & 1u; }
   /// Compact index of unknown u if it is a boundary unknown, else of the next one.
   int rank(int u) const {
     const size_t word = static_cast<size_t>(u) >> 6;
@@ -84,28 +129,28 @@ class BoundaryIndex {
 
 /// Interior/boundary split and the double-precision boundary data of one level.
 struct LevelSystem {
-  std::vector<SlotKind> kind;              ///< per slot
-  std::vector<SlotRow> rows[2];            ///< rows with interior slots, by lattice y parity
-  /// Consecutive rows of each box from its first to its last row with interior slots (rows
-  /// without interior slots are empty runs), for the banded relaxation.
+  std::vector<SlotKind> kind;  ///< per slot
+  /// Consecutive rows of each box from the row before its first row with interior slots (which
+  /// stores couplings to it) to its last row with interior slots, for the banded relaxation;
+  /// a row with interior slots always has the row before it in boxRows before it.
   std::vector<SlotRow> boxRows;
-  std::vector<RowBand> bands;              ///< bands of boxRows, in order
-  std::vector<int32_t> boundarySlots;      ///< compact boundary index -> slot
+  std::vector<RowBand> bands;          ///< bands of boxRows, in order
+  std::vector<int32_t> boundarySlots;  ///< compact boundary index -> slot
   /// Boundary unknowns and their compact indices; the other unknowns are relaxed by Gauss–Seidel.
   BoundaryIndex boundaryIndex;
-  int interiorTotal = 0;                   ///< number of interior unknowns
-  int64_t stencilSize = 0;                 ///< coefficients over all runs (kStencilPlanes per slot)
-  int64_t nonZeros = 0;                    ///< non-zeros of A^l
-  int64_t boundaryNonZeros = 0;            ///< non-zeros of A_bb^l
+  int interiorTotal = 0;         ///< number of interior unknowns
+  int64_t stencilSize = 0;       ///< coefficients over all rows (kStencilPlanes per stored slot)
+  int64_t nonZeros = 0;          ///< non-zeros of A^l
+  int64_t boundaryNonZeros = 0;  ///< non-zeros of A_bb^l
   /// [A_bi^l A_bb^l]: the complete boundary rows, each with its A_bi^l entries (non-boundary
   /// columns) first, up to offBlockEnd, then its A_bb^l entries (one copy serves both blocks).
   SlotCsr boundaryRows;
-  std::vector<int64_t> offBlockEnd;        ///< per boundary row: end of its A_bi^l entries
+  std::vector<int64_t> offBlockEnd;  ///< per boundary row: end of its A_bi^l entries
   /// A_ib^l: per slot of fixupSlots (interior slots with a boundary neighbour), its entries with
   /// the compact boundary index as column.
   SlotCsr interiorNextToBoundary;
-  std::vector<int32_t> fixupSlots;         ///< interior slots with a boundary neighbour
-  CholmodSolver boundarySolver;            ///< factorisation of A_bb^l
+  std::vector<int32_t> fixupSlots;  ///< interior slots with a boundary neighbour
+  CholmodSolver boundarySolver;     ///< factorisation of A_bb^l
   int interiorCount() const { return interiorTotal; }
   /// Slots of the level: the length of one channel plane of a slot vector.
   int64_t slotCount() const { return static_cast<int64_t>(kind.size()); }
@@ -170,7 +215,6 @@ void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSyste
 template <typename T>
 Eigen::SparseMatrix<double> galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
                                               std::span<const T> stencils,
-                                              std::span<const T> rowSums,
-                                              const GridLevel& coarse);
+                                              std::span<const T> rowSums, const GridLevel& coarse);
 
 }  // namespace texgrad::detail

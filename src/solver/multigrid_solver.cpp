@@ -125,11 +125,10 @@ double sumOfSquares(const T* v, size_t n) {
 /// coefficients' float rounding then perturbs only the differences, never the small row sum (the
 /// screening term), and no large terms cancel in float: A x to double-like accuracy for smooth x.
 template <typename T>
-void negatedProductRun(int64_t n, const T* w, const T* rowSum, const T* up, const T* mid,
-                       const T* down, T* y) {
-  const T* inverse = w + detail::kInverseDiagonal * n;
-  auto term = [&](int plane, int64_t i, T neighbour, double centre) {
-    return double(w[plane * n + i]) * (double(neighbour) - centre);
+void negatedProductRun(int64_t n, const detail::RunStencil<T>& w, const T* rowSum, const T* up,
+                       const T* mid, const T* down, T* y) {
+  auto term = [&](int k, int64_t i, T neighbour, double centre) {
+    return double(w.w[k][i]) * (double(neighbour) - centre);
   };
   for (int64_t i = 0; i < n; ++i) {
     const int64_t j = 2 * i;
@@ -139,7 +138,7 @@ void negatedProductRun(int64_t n, const T* w, const T* rowSum, const T* up, cons
                          ((term(5, i, mid[j + 1], c) + term(6, i, down[j - 1], c)) +
                           (term(7, i, down[j], c) + term(8, i, down[j + 1], c))) +
                          double(rowSum[j]) * c;
-    y[j] = inverse[i] == T(0) ? T(0) : static_cast<T>(-value);
+    y[j] = w.inverse[i] == T(0) ? T(0) : static_cast<T>(-value);
   }
 }
 
@@ -153,13 +152,16 @@ void negatedInteriorProduct(const detail::LevelSystem& sys, const T* stencil, co
                     [&](const tbb::blocked_range<size_t>& range) {
                       for (size_t i = range.begin(); i != range.end(); ++i) {
                         const detail::SlotRow& row = sys.boxRows[i];
-                        for (int q = 0; q < 2; ++q)
+                        for (int q = 0; q < 2; ++q) {
+                          const int64_t n = row.runLength(q);
+                          if (n <= 0) continue;
+                          const auto w = detail::runStencil(stencil, sys.boxRows[i - 1], row, q);
                           for (int c = 0; c < k; ++c) {
                             const int64_t s0 = c * plane + row.begin + q;
-                            negatedProductRun<T>(row.runLength(q), stencil + row.coeffsOf(q),
-                                                 rowSums + row.begin + q, x + s0 - row.width,
+                            negatedProductRun<T>(n, w, rowSums + row.begin + q, x + s0 - row.width,
                                                  x + s0, x + s0 + row.width, r + s0);
                           }
+                        }
                       }
                     });
 }
@@ -200,8 +202,8 @@ struct MultigridSolver<Scalar>::Impl {
     detail::LevelSystem sys;
     PageArray<T> stencil;  ///< interior stencils (assignStencils)
     std::vector<T> x, b, r;
-    detail::LineSet lines;       ///< anisotropic interior slots relaxed by lines
-    std::vector<T> lineCoeffs;   ///< their coefficients (detail::kLinePlanes per slot)
+    detail::LineSet lines;      ///< anisotropic interior slots relaxed by lines
+    std::vector<T> lineCoeffs;  ///< their coefficients (detail::kLinePlanes per slot)
     std::vector<detail::BoxRow> boxRows;
     Eigen::MatrixXd work;
   };
@@ -209,7 +211,7 @@ struct MultigridSolver<Scalar>::Impl {
   MultigridOptions options;
   GridHierarchy hierarchy;
   std::vector<Level> levels;
-  std::vector<int64_t> nonZeros;  // per level, of A^l
+  std::vector<int64_t> nonZeros;         // per level, of A^l
   std::vector<int64_t> heldMatrixBytes;  // per level (MultigridLevelInfo::setUpMatrixBytes)
   PageArray<T> rowSums;  // per slot of level 0: sum of A^0's row (applyOperator, A^1's set-up)
   CholmodSolver coarseSolver;
@@ -321,8 +323,8 @@ struct MultigridSolver<Scalar>::Impl {
           const bool release = fromLevelData && handedOver;
           std::function<void(int)> consumed;
           if (l == 0)
-            consumed = rowSummer(grid, a, handedOver.rowSums(),
-                                 release ? releaser(handedOver) : nullptr);
+            consumed =
+                rowSummer(grid, a, handedOver.rowSums(), release ? releaser(handedOver) : nullptr);
           detail::assignStencils<T>(grid, a, lv.sys, lv.stencil, release, consumed);
         }
       }
@@ -348,11 +350,9 @@ struct MultigridSolver<Scalar>::Impl {
       if (numericPhase && split && factoriseLast) detail::factoriseBoundary(grid, lv.sys);
       if (l == 0) handedOver.free();  // A^0
       if (fromLevelData) {
-        Eigen::SparseMatrix<double> formed =
-            detail::galerkinFromLevel(grid, lv.sys, std::span<const T>(lv.stencil.data(),
-                                                                      lv.stencil.size()),
-                                      std::span<const T>(rowSums.data(), rowSums.size()),
-                                      hierarchy.level(l + 1));
+        Eigen::SparseMatrix<double> formed = detail::galerkinFromLevel(
+            grid, lv.sys, std::span<const T>(lv.stencil.data(), lv.stencil.size()),
+            std::span<const T>(rowSums.data(), rowSums.size()), hierarchy.level(l + 1));
         next.swap(formed);
       }
       heldMatrixBytes[sl] +=
@@ -390,8 +390,7 @@ struct MultigridSolver<Scalar>::Impl {
   /// releases A^0. Only interior rows' sums are used (the difference form of the interior
   /// rows), and every interior row lies in a band.
   std::function<void(int)> rowSummer(const GridLevel& grid, const SparseSum& a,
-                                     std::span<const float> given,
-                                     std::function<void(int)> then) {
+                                     std::span<const float> given, std::function<void(int)> then) {
     if (rowSums.size() != static_cast<size_t>(grid.slotCount))
       rowSums = PageArray<T>::zeros(static_cast<size_t>(grid.slotCount), static_cast<bool>(then));
     return [this, &grid, &a, given, then = std::move(then), done = 0](int end) mutable {
@@ -407,19 +406,17 @@ struct MultigridSolver<Scalar>::Impl {
   /// their `given` sums if not empty.
   void sumRows(const GridLevel& grid, const SparseSum& a, std::span<const float> given, int begin,
                int end) {
-    tbb::parallel_for(tbb::blocked_range<int>(begin, end, 4096),
-                      [&](const tbb::blocked_range<int>& range) {
-                        for (int u = range.begin(); u != range.end(); ++u) {
-                          double sum = 0.0;
-                          if (!given.empty())
-                            sum = given[static_cast<size_t>(u)];
-                          else
-                            for (int e = a.outer()[u]; e < a.outer()[u + 1]; ++e)
-                              sum += a.value(e);
-                          rowSums.data()[grid.slotOfUnknown[static_cast<size_t>(u)]] =
-                              static_cast<T>(sum);
-                        }
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<int>(begin, end, 4096), [&](const tbb::blocked_range<int>& range) {
+          for (int u = range.begin(); u != range.end(); ++u) {
+            double sum = 0.0;
+            if (!given.empty())
+              sum = given[static_cast<size_t>(u)];
+            else
+              for (int e = a.outer()[u]; e < a.outer()[u + 1]; ++e) sum += a.value(e);
+            rowSums.data()[grid.slotOfUnknown[static_cast<size_t>(u)]] = static_cast<T>(sum);
+          }
+        });
   }
 
   /// Throws InvalidInputError naming `caller` unless a hierarchy was built or set.
@@ -521,8 +518,8 @@ struct MultigridSolver<Scalar>::Impl {
       detail::relaxLines(lv.lines, lv.lineCoeffs.data(), lv.b.data(), lv.x.data(), channels,
                          lv.sys.slotCount(), false);
       if (residual)
-        detail::interiorResidual(lv.sys, lv.stencil.data(), lv.b.data(), lv.x.data(),
-                                 lv.r.data(), channels);
+        detail::interiorResidual(lv.sys, lv.stencil.data(), lv.b.data(), lv.x.data(), lv.r.data(),
+                                 channels);
     }
     times.relaxation += secondsSince(start);
   }
@@ -933,8 +930,7 @@ int64_t MultigridSolver<Scalar>::storageBytes() const {
                   static_cast<int64_t>(m.coarseWork.size()) * int64_t(sizeof(double));
   for (const auto& lv : m.levels) {
     bytes += lv.sys.storageBytes() + static_cast<int64_t>(lv.stencil.bytes()) +
-             capacityBytes(lv.x, lv.b, lv.r, lv.lineCoeffs) +
-             capacityBytes(lv.boxRows) +
+             capacityBytes(lv.x, lv.b, lv.r, lv.lineCoeffs) + capacityBytes(lv.boxRows) +
              static_cast<int64_t>(lv.work.size()) * int64_t(sizeof(double));
     for (const auto& byParity : lv.lines.lines)
       for (const auto& lines : byParity) bytes += capacityBytes(lines);

@@ -23,11 +23,11 @@ constexpr double kHeadroom = 1.10;  ///< 10% above the value measured when the b
 /// Bytes per active texel measured on cubeSphere() at 256² (assembled once, piece integrals
 /// freed; multigrid in float after one 3-channel cycle).
 constexpr double kOperatorsMeasured = 204.3;
-constexpr double kMultigridMeasured = 240.1;  // with level 0's row sums (applyOperator)
+constexpr double kMultigridMeasured = 222.1;  // with level 0's row sums (applyOperator)
 /// The filter's SystemSolver (CG on the level-0 operator, no copy of A) after one solve.
-constexpr double kFilterSolverMeasured = 240.1;
+constexpr double kFilterSolverMeasured = 222.1;
 /// The one-shot filter's solver after its last channel's solve (level vectors for one channel).
-constexpr double kOneShotSolverMeasured = 198.8;
+constexpr double kOneShotSolverMeasured = 180.9;
 /// alpha M + S as the one-shot filter forms it for float cycles (screenedSystemInFloat).
 /// (18% of its entries are held exact too on this small mesh: its texels without a regular
 /// stencil; at spot 4096², 3.6%.)

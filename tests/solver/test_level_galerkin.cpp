@@ -73,8 +73,8 @@ Eigen::SparseMatrix<double> coarseFromLevelData(const GridHierarchy& h,
   detail::assignStencils<T>(fine, a, system, stencils);
   EXPECT_GT(system.interiorCount(), 0);
   EXPECT_GT(system.boundaryCount(), 0);
-  return detail::galerkinFromLevel<T>(fine, system, std::span<const T>(stencils.data(),
-                                                                       stencils.size()),
+  return detail::galerkinFromLevel<T>(fine, system,
+                                      std::span<const T>(stencils.data(), stencils.size()),
                                       rowSumsOf<T>(fine, a), h.level(1));
 }
 
@@ -240,4 +240,41 @@ TEST(LevelGalerkin, StencilsNeverReadAColumnTheyDeclaredConsumed) {
   EXPECT_EQ(declared.back(), fine.unknownCount()) << "every column, in the end";
   ASSERT_EQ(stencils.size(), expected.size());
   EXPECT_TRUE(std::equal(stencils.data(), stencils.data() + stencils.size(), expected.data()));
+}
+
+TEST(LevelGalerkin, EachRunReadsItsRowsOfAFromCouplingsStoredOnce) {
+  // Every coupling is stored once, by the slot whose forward half it lies in; the weights a run
+  // reads (runStencil) must still be each interior slot's whole row of A, absent entries as
+  // zeros (thinned), 1 / centre as the mask, and a zero mask on the other visited slots.
+  const test::SyntheticProblem p = test::multiChartProblem(24);
+  const GridHierarchy h = GridHierarchy::build(p.grid, 4, 16);
+  const GridLevel& fine = h.level(0);
+  for (const Eigen::SparseMatrix<double>& a : {p.system(0.01), thinned(p.system(0.01), fine)}) {
+    const detail::LevelSystem system = boundaryAssigned(fine, a);
+    PageArray<double> stencils;
+    detail::assignStencils<double>(fine, a, system, stencils);
+    int checked = 0;
+    for (size_t r = 0; r < system.boxRows.size(); ++r) {
+      const detail::SlotRow& row = system.boxRows[r];
+      for (int q = 0; q < 2; ++q) {
+        if (row.runLength(q) <= 0) continue;
+        const auto run = detail::runStencil(stencils.data(), system.boxRows[r - 1], row, q);
+        for (int64_t i = 0; i < row.runLength(q); ++i) {
+          const int64_t s = row.begin + q + 2 * i;
+          if (system.kind[static_cast<size_t>(s)] != SlotKind::Interior) {
+            EXPECT_EQ(run.inverse[i], 0.0) << "slot " << s;
+            continue;
+          }
+          const auto expected =
+              detail::stencilRow(fine, a, fine.unknownOfSlot[static_cast<size_t>(s)]);
+          for (int k = 0; k < 9; ++k)
+            EXPECT_DOUBLE_EQ(run.w[k][i], expected[static_cast<size_t>(k)])
+                << "slot " << s << ", weight " << k;
+          EXPECT_DOUBLE_EQ(run.inverse[i], 1.0 / expected[4]) << "slot " << s;
+          ++checked;
+        }
+      }
+    }
+    EXPECT_EQ(checked, system.interiorCount());
+  }
 }

@@ -24,6 +24,11 @@ Eigen::MatrixXd gatherTexels(const TexelGrid& grid, const Image& image);
 /// inactive texels are left as they are.
 void scatterTexels(const TexelGrid& grid, const Eigen::MatrixXd& values, Image& image);
 
+/// Writes one channel's unknown values (unknownCount) into channel c of the in-image texels of
+/// `image`, as scatterTexels writes that column.
+void scatterTexelChannel(const TexelGrid& grid, const Eigen::Ref<const Eigen::VectorXd>& values,
+                         int c, Image& image);
+
 /// Per-cell values of a scalar map sampled bilinearly at cell centres (indexed by
 /// TexelGrid::cellIndex), mapped linearly from [0, 1] onto [low, high]. Channel 0 is used for
 /// one-channel maps, the mean of the first three channels otherwise. The map may have any size.
