@@ -5,12 +5,6 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
-#include <algorithm>
-#include <array>
-#include <cmath>
-#include <cstdint>
-#include <limits>
-
 #include "image_spec.h"
 #include "texgrad/core/error.h"
 

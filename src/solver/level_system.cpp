@@ -101,7 +101,7 @@ void lockNearWeakRows(const GridLevel& level, const SparseSum& a, int reach,
 
 /// Row r of `box` with its visited slots, from its first to its last interior slot (none if it
 /// has no interior slot); its stored slots are set by storeRows.
-SlotRow interiorRun(const GridBox& box, int boxIndex, int r, const LevelSystem& system) {
+SlotRow boxRowOf(const GridBox& box, int boxIndex, int r, const LevelSystem& system) {
   const int64_t rowStart = box.offset + static_cast<int64_t>(r) * box.width;
   int64_t first = -1, last = -1;
   for (int64_t s = rowStart; s < rowStart + box.width; ++s) {
@@ -160,7 +160,7 @@ void collectRows(const GridLevel& level, LevelSystem& system) {
     const int64_t boxFirst = static_cast<int64_t>(system.boxRows.size());
     int64_t boxEnd = boxFirst;
     for (int r = 1; r + 1 < box.height; ++r) {
-      const SlotRow row = interiorRun(box, static_cast<int>(b), r, system);
+      const SlotRow row = boxRowOf(box, static_cast<int>(b), r, system);
       const bool interior = row.begin != row.end;
       // Before the first interior row only the row just before it is kept (it stores the
       // couplings up to it). An interior slot has its 8 lattice neighbours, unknowns, so neither
@@ -173,7 +173,7 @@ void collectRows(const GridLevel& level, LevelSystem& system) {
     if (boxEnd == boxFirst) continue;
     if (system.boxRows[static_cast<size_t>(boxFirst)].begin !=
         system.boxRows[static_cast<size_t>(boxFirst)].end)
-      throw std::logic_error("multigrid: an interior slot on a box's first row");
+      throw NumericalError("multigrid: an interior slot on a box's first row (internal error)");
     storeRows(boxFirst, boxEnd, system);
     addBands(boxFirst, boxEnd, system);
   }
@@ -426,6 +426,10 @@ void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSyste
       T centre(0);
       for (int e = a.outer()[u]; e != a.outer()[u + 1]; ++e) {
         const int k = around.stencilIndex(a.inner()[e]);
+        if (k < 0)
+          throw InvalidInputError("multigrid: row " + std::to_string(u) +
+                                  " of the matrix is not the stencil the set-up classified; an "
+                                  "update needs the pattern of init");
         const T value = static_cast<T>(a.value(e));
         if (k == 4) {
           centre = value;

@@ -18,7 +18,9 @@
 namespace texgrad::detail {
 
 /// Coefficient planes per stored slot of a row. A is symmetric, so a coupling is stored once, by
-/// the slot whose forward half it lies in: planes 0 to 3 hold the couplings to (dx, dy) = (+1, 0),
+/// the slot whose forward half it lies in (from that slot's row of A, which serves both: coarse
+/// A^l is symmetric up to the rounding of its sums): planes 0 to 3 hold the couplings to (dx, dy) =
+/// (+1, 0),
 /// (-1, +1), (0, +1), (+1, +1) (stencil indices 5 to 8, index (dy + 1) * 3 + (dx + 1)); a slot
 /// reads the other half (indices 0 to 3) from the neighbour there, index k from plane 3 - k.
 /// Then the centre and 1 / centre (0 on slots that are not interior: the mask). Ten planes per
@@ -188,14 +190,15 @@ void assignBoundary(const GridLevel& level, const SparseSum& a, LevelSystem& sys
 /// the factorisation's work.
 void factoriseBoundary(const GridLevel& level, LevelSystem& system);
 
-/// Numeric phase for the interior: the stencil planes of every run (see SlotRow) from the rows of
-/// `a` at interior unknowns; the other slots of a run get zero coefficients and mask 0. The runs
-/// are filled a band of lattice rows at a time, upward; a new PageArray (unless `stencils` has
-/// the size already) is on pages of its own if `ownPages`, so that it becomes resident as it is
-/// filled, else from the heap. After each band, `consumed(u)`, if given, learns that no column
-/// of `a` before unknown u is read again (level 0 numbers its unknowns row by row), so that a
-/// caller owning `a` can release it meanwhile; after the last band u is the unknown count (a
-/// level without interior slots has no band: `consumed` is not called).
+/// Numeric phase for the interior: the stencil planes of every box row (see SlotRow) from the
+/// rows of `a` at interior unknowns; a stored slot that is not interior holds its couplings to
+/// interior neighbours and mask 0, the rest is zero. The rows are filled a band of lattice rows at
+/// a time, upward; a new PageArray (unless `stencils` has the size already) is on pages of its own
+/// if `ownPages`, so that it becomes resident as it is filled, else from the heap. After each band,
+/// `consumed(u)`, if given, learns that no column of `a` before unknown u is read again (level 0
+/// numbers its unknowns row by row), so that a caller owning `a` can release it meanwhile; after
+/// the last band u is the unknown count (a level without interior slots has no band: `consumed` is
+/// not called).
 template <typename T>
 void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSystem& system,
                     PageArray<T>& stencils, bool ownPages = false,
