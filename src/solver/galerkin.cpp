@@ -305,13 +305,10 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
       const SlotRow& above = system.boxRows[i - 1];
       double off = 0.0;
       for (int k = 0; k < 9; ++k) {  // stencil index k = (dy + 1) * 3 + (dx + 1)
-        const int64_t t = s + (k / 3 - 1) * int64_t(row.width) + (k % 3 - 1);
-        const int v = unknownOf(t);
+        const int v = unknownOf(s + stencilOffset(k, row.width));
         if (k == 4 || v < 0) continue;  // (A has no entry at an empty slot)
-        const int64_t at = k > 4    ? row.coefficient(s, forwardPlane(k))
-                           : k == 3 ? row.coefficient(t, forwardPlane(8 - k))
-                                    : above.coefficient(t, forwardPlane(8 - k));
-        const double value = static_cast<double>(stencils[static_cast<size_t>(at)]);
+        const auto at = static_cast<size_t>(couplingAt(above, row, s, k));
+        const double value = static_cast<double>(stencils[at]);
         off += value;
         f(v, value);
       }

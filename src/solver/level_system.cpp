@@ -433,13 +433,9 @@ void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSyste
         const T value = static_cast<T>(a.value(e));
         if (k == 4) {
           centre = value;
-        } else if (k > 4) {
-          w[row.coefficient(s, forwardPlane(k))] = value;
-        } else {
-          const int64_t t = s + (k / 3 - 1) * int64_t(row.width) + (k % 3 - 1);
-          if (system.kind[static_cast<size_t>(t)] == SlotKind::Interior) continue;
-          const SlotRow& holder = k == 3 ? row : above;
-          w[holder.coefficient(t, forwardPlane(8 - k))] = value;
+        } else if (k > 4 || system.kind[static_cast<size_t>(s + stencilOffset(k, row.width))] !=
+                                SlotKind::Interior) {
+          w[couplingAt(above, row, s, k)] = value;
         }
       }
       if (!(centre > T(0)))

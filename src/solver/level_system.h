@@ -64,6 +64,20 @@ struct SlotRow {
   }
 };
 
+/// Slot offset of stencil index k's neighbour, (dy + 1) * 3 + (dx + 1), in a box of `width`.
+constexpr int64_t stencilOffset(int k, int width) {
+  return (k / 3 - 1) * int64_t{width} + (k % 3 - 1);
+}
+
+/// Offset in the stencil array of weight k (not the centre) of slot s of `row`: its own plane
+/// for the forward half (k > 4), else the neighbour's plane 8 - k, stored by `row` (k = 3) or by
+/// `above`, the row before it in its box.
+inline int64_t couplingAt(const SlotRow& above, const SlotRow& row, int64_t s, int k) {
+  if (k > 4) return row.coefficient(s, forwardPlane(k));
+  const int64_t t = s + stencilOffset(k, row.width);
+  return (k == 3 ? row : above).coefficient(t, forwardPlane(8 - k));
+}
+
 /// Where the 9 weights and 1 / centre of the visited slots begin + q + 2i of a row are: weight
 /// k of slot i at w[k][i] (0 to 3 in the stored slots of the row itself and the row above, the
 /// row below storing none of them), inverse[i].
@@ -78,13 +92,10 @@ template <typename T>
 RunStencil<T> runStencil(const T* stencils, const SlotRow& above, const SlotRow& row, int q) {
   RunStencil<T> r;
   const int64_t s = row.begin + q;
-  for (int k = 5; k < 9; ++k) r.w[k] = stencils + row.coefficient(s, forwardPlane(k));
+  for (int k = 0; k < 9; ++k)
+    if (k != 4) r.w[k] = stencils + couplingAt(above, row, s, k);
   r.w[4] = stencils + row.coefficient(s, kCentre);
   r.inverse = stencils + row.coefficient(s, kInverseDiagonal);
-  r.w[3] = stencils + row.coefficient(s - 1, forwardPlane(5));                // (-1, 0)
-  r.w[0] = stencils + above.coefficient(s - row.width - 1, forwardPlane(8));  // (-1, -1)
-  r.w[1] = stencils + above.coefficient(s - row.width, forwardPlane(7));      // (0, -1)
-  r.w[2] = stencils + above.coefficient(s - row.width + 1, forwardPlane(6));  // (+1, -1)
   return r;
 }
 
