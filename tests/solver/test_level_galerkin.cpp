@@ -12,6 +12,7 @@
 
 #include "solver/level_system.h"
 #include "synthetic_problem.h"
+#include "texgrad/core/error.h"
 #include "texgrad/solver/galerkin.h"
 #include "texgrad/solver/grid_hierarchy.h"
 #include "texgrad/solver/multigrid_solver.h"
@@ -277,4 +278,27 @@ TEST(LevelGalerkin, EachRunReadsItsRowsOfAFromCouplingsStoredOnce) {
     }
     EXPECT_EQ(checked, system.interiorCount());
   }
+}
+
+TEST(LevelGalerkin, StencilsRefuseARowThatIsNotTheClassifiedStencil) {
+  // An interior row with an entry beyond its 3 x 3 neighbourhood (a matrix of another pattern
+  // handed to an update) is an error, not a write into some other slot's coefficients.
+  const test::SyntheticProblem p = test::multiChartProblem(24);
+  const GridHierarchy h = GridHierarchy::build(p.grid, 4, 16);
+  const GridLevel& fine = h.level(0);
+  const Eigen::SparseMatrix<double> a = p.system(0.01);
+  const detail::LevelSystem system = boundaryAssigned(fine, a);
+  int u = 0;
+  while (system.kind[static_cast<size_t>(fine.slotOfUnknown[static_cast<size_t>(u)])] !=
+         SlotKind::Interior)
+    ++u;
+  const int far = fine.unknownCount() - 1;
+  ASSERT_GT(std::abs(fine.point(far).y - fine.point(u).y), 1);
+  Eigen::SparseMatrix<double> other = a;
+  other.coeffRef(u, far) = 0.0;
+  other.coeffRef(far, u) = 0.0;
+  other.makeCompressed();
+  PageArray<float> stencils;
+  EXPECT_THROW(detail::assignStencils<float>(fine, other, system, stencils), InvalidInputError);
+  EXPECT_NO_THROW(detail::assignStencils<float>(fine, a, system, stencils));
 }
