@@ -21,7 +21,7 @@ if(TEXGRAD_BUILD_VIEWER_PAGE)
 endif()
 install(FILES LICENSE NOTICE README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
 
-# CMake package. A static texgrad leaves its private libraries (TBB, CHOLMOD, OpenImageIO, ...) to
+# CMake package. A static texgrad leaves its private libraries (TBB, CHOLMOD, libpng, OpenEXR, ...) to
 # the consumer's link, so the package config finds them (FindCHOLMOD.cmake travels with it).
 set(TEXGRAD_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/texgrad)
 if(BUILD_SHARED_LIBS)

@@ -1,4 +1,4 @@
-// Fuzz target for image decoding (readImageFromMemory, through OpenImageIO): the first byte picks
+// Fuzz target for image decoding (readImageFromMemory: libpng, libjpeg, OpenEXR, libtiff): the first byte picks
 // the extension the name carries, the rest are the file's bytes.
 #include <array>
 #include <cstddef>

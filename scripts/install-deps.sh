@@ -9,7 +9,9 @@ packages=(
   # alternative): OpenBLAS instead of the reference BLAS makes a direct geodesic on spot at
   # 1024² 2.4x faster (18.1 -> 7.5 s). Its serial build starts no threads of its own next to TBB's.
   libopenblas0-serial
-  libopenimageio-dev libtinyobjloader-dev libtinygltf-dev nlohmann-json3-dev libstb-dev
+  # Image files: each format through its own library (src/io/image_codecs.h).
+  libpng-dev libjpeg-dev libtiff-dev libopenexr-dev
+  libtinyobjloader-dev libtinygltf-dev nlohmann-json3-dev libstb-dev
   # bench/memory.py upscales the shared textures with oiiotool.
   openimageio-tools
   libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev

@@ -20,7 +20,7 @@ The memory attributable to the module is therefore also measured in runs pinned 
 so the library runs without a worker thread and allocates in the same order every run): there
 each figure repeats to 0.1 MB, and the difference is what the module holds beyond the C++ call,
 its float copy of the input (48 MB at 2048² RGB). Both are printed; "threads" is the process's
-thread count after the call (OpenImageIO's pool included; one fewer when pinned: TBB's worker).
+thread count after the call (one fewer when pinned: TBB's worker).
 """
 
 import argparse

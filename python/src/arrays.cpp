@@ -50,8 +50,8 @@ SampleType sampleTypeOf(const py::array& a, const std::string& name) {
                        "; texgrad takes uint8, uint16, float32 or float64 images");
 }
 
-/// Normalised float value of one sample: integers to [0, 1] as readImage gets them from
-/// OpenImageIO (v * (1 / max) in float, which differs from v / max in the last bit for some v).
+/// Normalised float value of one sample: integers to [0, 1] as readImage decodes them
+/// (v * (1 / max) in float, which differs from v / max in the last bit for some v).
 template <typename T>
 float sampleValue(T v) {
   if constexpr (std::is_integral_v<T>)

@@ -17,7 +17,7 @@ namespace texgrad {
 namespace {
 
 /// `.NAME.tmp-PID-N.EXT` beside `target`: hidden, unique per process and call, and ending in the
-/// target's extension so writers that pick the file format from the name (OpenImageIO) still do.
+/// target's extension, so that a leftover from a crash still shows what kind of file it is.
 std::filesystem::path temporaryPathFor(const std::filesystem::path& target) {
   static std::atomic<unsigned long> counter{0};
   const std::string name = "." + target.stem().string() + ".tmp-" + std::to_string(::getpid()) +

@@ -2,10 +2,9 @@
 // size checked from its header.
 #include "texgrad/io/camera_reader.h"
 
-#include <OpenImageIO/imageio.h>
-
 #include "camera_formats.h"
 #include "texgrad/core/error.h"
+#include "texgrad/io/image_io.h"
 
 namespace texgrad {
 namespace {
@@ -28,17 +27,12 @@ std::vector<Camera> readColmapFolder(const std::filesystem::path& folder) {
 
 /// Width and height from an image file's header (no pixels are decoded).
 std::pair<int, int> imageSize(const std::filesystem::path& path, const std::string& where) {
-  auto input = OIIO::ImageInput::open(path.string());
-  if (!input) {
-    std::string why = OIIO::geterror();
-    for (char& c : why)
-      if (c == '\n') c = ' ';
-    throw InvalidInputError(where + "cannot read the photo's header (" + why +
+  try {
+    return readImageSize(path);
+  } catch (const Error& e) {
+    throw InvalidInputError(where + "cannot read the photo's header (" + std::string(e.what()) +
                             "); check that it is an image file");
   }
-  const std::pair<int, int> size{input->spec().width, input->spec().height};
-  input->close();
-  return size;
 }
 
 /// The cameras of `path` by its kind, possibly none.

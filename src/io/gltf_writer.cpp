@@ -232,7 +232,8 @@ bool bufferViewUsedElsewhere(const tinygltf::Model& model, int view, int image) 
 }
 
 /// If image `image` is stored in a bufferView nothing else uses, cuts its bytes out of the buffer
-/// (later bufferViews move down by a multiple of 4, keeping their alignment) and returns the
+/// (later bufferViews move down by a multiple of 4, keeping their alignment; with no later ones,
+/// the buffer ends where the image started) and returns the
 /// bufferView's index for reuse; returns -1 and changes nothing if that is not safe.
 int releaseImageBytes(tinygltf::Model& model, int image) {
   const int index = model.images[static_cast<size_t>(image)].bufferView;
@@ -253,7 +254,14 @@ int releaseImageBytes(tinygltf::Model& model, int image) {
         other.byteOffset + other.byteLength > start)
       return -1;  // overlapping views share bytes
   }
-  const size_t cut = (end - start) / 4 * 4;
+  // Later bufferViews move down by a multiple of 4; with none after it, everything from the
+  // image's start goes (its padding too), so a replaced image leaves no byte behind.
+  const bool bytesAfter = std::any_of(model.bufferViews.begin(), model.bufferViews.end(),
+                                      [&](const tinygltf::BufferView& other) {
+                                        return other.buffer == view.buffer &&
+                                               other.byteOffset >= end && &other != &view;
+                                      });
+  const size_t cut = bytesAfter ? (end - start) / 4 * 4 : data.size() - start;
   data.erase(data.begin() + static_cast<std::ptrdiff_t>(start),
              data.begin() + static_cast<std::ptrdiff_t>(start + cut));
   for (auto& other : model.bufferViews)

@@ -1,25 +1,18 @@
-// Image file I/O through OpenImageIO: where file rows (top first) become texel rows (bottom first)
-// and back (docs/architecture.md, Conventions), and where content is checked against the file's
-// extension.
+// Image file I/O: where a file's content is checked against its extension and handed to the
+// codec of its format (image_codecs.h: libpng, libjpeg-turbo, OpenEXR, libtiff), which turns file
+// rows (top first) into texel rows (bottom first) and back (docs/architecture.md, Conventions).
 #include "texgrad/io/image_io.h"
-
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <cmath>
-#include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iterator>
-#include <limits>
 #include <span>
 #include <string_view>
-#include <type_traits>
 
-#include "image_spec.h"
+#include "image_codecs.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/atomic_file.h"
 
@@ -28,10 +21,7 @@ namespace {
 
 /// Bytes looked at to describe unrecognised content.
 constexpr size_t kMagicBytes = 16;
-/// Largest image accepted (2^30 texels, e.g. 32768 x 32768): beyond it the float copy alone
-/// needs more than 4 GB per channel, which is a mistake rather than a texture.
-constexpr int64_t kMaxTexels = int64_t{1} << 30;
-/// Channels texgrad processes: grey, grey + alpha, RGB, RGBA.
+/// Channels an image file holds: grey, grey + alpha, RGB, RGBA.
 constexpr int kMaxChannels = 4;
 
 /// File formats texgrad recognises by extension and by content.
@@ -51,23 +41,6 @@ std::string_view kindName(FileKind kind) {
       break;
   }
   return "unknown";
-}
-
-/// Extension OpenImageIO associates with a kind (used to name in-memory images).
-std::string_view kindExtension(FileKind kind) {
-  switch (kind) {
-    case FileKind::Png:
-      return "png";
-    case FileKind::Jpeg:
-      return "jpg";
-    case FileKind::Exr:
-      return "exr";
-    case FileKind::Tiff:
-      return "tif";
-    case FileKind::Unknown:
-      break;
-  }
-  return "";
 }
 
 /// "a PNG", "an OpenEXR".
@@ -130,82 +103,22 @@ std::string describeContent(std::span<const unsigned char> bytes) {
   return "unrecognised binary data";
 }
 
-PixelFormat formatOf(OIIO::TypeDesc type) {
-  switch (type.basetype) {
-    case OIIO::TypeDesc::UINT8:
-    case OIIO::TypeDesc::INT8:
-      return PixelFormat::UInt8;
-    case OIIO::TypeDesc::UINT16:
-    case OIIO::TypeDesc::INT16:
-      return PixelFormat::UInt16;
-    case OIIO::TypeDesc::HALF:
-      return PixelFormat::Half;
-    default:
-      return PixelFormat::Float;
-  }
-}
-
-OIIO::TypeDesc typeOf(PixelFormat format) {
-  switch (format) {
-    case PixelFormat::UInt8:
-      return OIIO::TypeDesc::UINT8;
-    case PixelFormat::UInt16:
-      return OIIO::TypeDesc::UINT16;
-    case PixelFormat::Half:
-      return OIIO::TypeDesc::HALF;
-    case PixelFormat::Float:
+/// Decodes `bytes`, whose format is `kind`, with that format's codec.
+Image decodeBytes(codec::Bytes bytes, FileKind kind, const std::string& name) {
+  switch (kind) {
+    case FileKind::Png:
+      return codec::decodePng(bytes, name);
+    case FileKind::Jpeg:
+      return codec::decodeJpeg(bytes, name);
+    case FileKind::Exr:
+      return codec::decodeExr(bytes, name);
+    case FileKind::Tiff:
+      return codec::decodeTiff(bytes, name);
+    case FileKind::Unknown:
       break;
   }
-  return OIIO::TypeDesc::FLOAT;
-}
-
-/// Reader hints: keep colour and alpha as stored (no premultiplication), so values round-trip.
-OIIO::ImageSpec readerConfig() {
-  OIIO::ImageSpec config;
-  config.attribute("oiio:UnassociatedAlpha", 1);
-  return config;
-}
-
-/// Swaps rows j and H-1-j: file order (top first) <-> texel order (bottom first).
-template <typename T>
-void flipRows(std::vector<T>& data, int width, int height, int channels) {
-  const auto row = static_cast<ptrdiff_t>(width) * channels;
-  for (int j = 0; j < height / 2; ++j) {
-    auto a = data.begin() + j * row;
-    auto b = data.begin() + (height - 1 - j) * row;
-    std::swap_ranges(a, a + row, b);
-  }
-}
-
-/// Reads subimage 0 of an opened input into texel order; `name` is used in messages.
-Image decode(OIIO::ImageInput& input, const std::string& name) {
-  const OIIO::ImageSpec& spec = input.spec();
-  if (spec.width <= 0 || spec.height <= 0)
-    throw InvalidInputError(name + " declares an empty image (" + std::to_string(spec.width) +
-                            " x " + std::to_string(spec.height) + "); re-export the texture");
-  if (spec.depth > 1)
-    throw UnsupportedError(name + " is a volume image (depth " + std::to_string(spec.depth) +
-                           "); texgrad needs a 2-D texture");
-  if (spec.nchannels < 1 || spec.nchannels > kMaxChannels)
-    throw UnsupportedError(name + " has " + std::to_string(spec.nchannels) +
-                           " channels; texgrad handles 1 to 4 (grey, grey+alpha, RGB, RGBA)");
-  if (spec.x != spec.full_x || spec.y != spec.full_y || spec.width != spec.full_width ||
-      spec.height != spec.full_height)
-    throw UnsupportedError(name +
-                           " has a data window different from its display window; "
-                           "crop it to the full image first (oiiotool IN --croptofull -o OUT)");
-  if (static_cast<int64_t>(spec.width) * spec.height > kMaxTexels)
-    throw UnsupportedError(name + " is " + std::to_string(spec.width) + " x " +
-                           std::to_string(spec.height) + " texels; texgrad handles at most " +
-                           std::to_string(kMaxTexels) + " texels");
-
-  Image image(spec.width, spec.height, spec.nchannels, formatOf(spec.format));
-  // Some readers (TIFF strips, JPEG's premature end) record an error yet return success.
-  if (!input.read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()) ||
-      input.has_error())
-    throw InvalidInputError(name + " is truncated or corrupt: " + oneLine(input.geterror()));
-  flipRows(image.pixels, image.width, image.height, image.channels);
-  return image;
+  throw InvalidInputError(name + " is not a PNG, JPEG, OpenEXR or TIFF image (content looks like " +
+                          describeContent(bytes) + ")");
 }
 
 /// The whole file (images are decoded from memory, so the content is read exactly once).
@@ -216,80 +129,6 @@ std::vector<unsigned char> readFileBytes(const std::filesystem::path& path) {
                                    std::istreambuf_iterator<char>()};
   if (in.bad()) throw IoError("reading " + path.string() + " failed");
   return bytes;
-}
-
-uint32_t bigEndian32(const unsigned char* p) {
-  return uint32_t{p[0]} << 24 | uint32_t{p[1]} << 16 | uint32_t{p[2]} << 8 | uint32_t{p[3]};
-}
-
-/// CRC-32 of the PNG specification (ISO 3309 polynomial), over chunk type and data.
-uint32_t pngCrc(std::span<const unsigned char> bytes) {
-  static const std::array<uint32_t, 256> table = [] {
-    std::array<uint32_t, 256> t{};
-    for (uint32_t n = 0; n < 256; ++n) {
-      uint32_t c = n;
-      for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-      t[n] = c;
-    }
-    return t;
-  }();
-  uint32_t crc = 0xFFFFFFFFu;
-  for (unsigned char b : bytes) crc = table[(crc ^ b) & 0xFFu] ^ (crc >> 8);
-  return ~crc;
-}
-
-/// Checks a PNG's chunk structure (PNG spec sec. 5): complete chunks with valid checksums, a
-/// sane non-empty IHDR first, IDAT data and a closing IEND. libpng prints its errors to stderr
-/// (OpenImageIO installs no handler), so malformed files are rejected here, with a message.
-void checkPngStructure(std::span<const unsigned char> bytes, const std::string& name) {
-  constexpr size_t kSignature = 8, kChunkOverhead = 12, kIhdrLength = 13;
-  size_t pos = kSignature;
-  bool sawIhdr = false, sawIdat = false;
-  while (true) {
-    if (pos + kChunkOverhead > bytes.size())
-      throw InvalidInputError(name + " is truncated (the PNG ends before its IEND chunk)");
-    const size_t length = bigEndian32(&bytes[pos]);
-    const std::string type(reinterpret_cast<const char*>(&bytes[pos + 4]), 4);
-    if (length > bytes.size() - pos - kChunkOverhead)
-      throw InvalidInputError(name + " is truncated (PNG chunk " + type + " at byte " +
-                              std::to_string(pos) + " runs past the end of the file)");
-    const unsigned char* data = &bytes[pos + 8];
-    if (pngCrc(bytes.subspan(pos + 4, length + 4)) != bigEndian32(data + length))
-      throw InvalidInputError(name + " is corrupt (bad checksum in PNG chunk " + type +
-                              " at byte " + std::to_string(pos) + ")");
-    if (!sawIhdr) {
-      if (type != "IHDR" || length != kIhdrLength)
-        throw InvalidInputError(name + " is corrupt (a PNG must start with an IHDR chunk)");
-      const uint32_t width = bigEndian32(data), height = bigEndian32(data + 4);
-      if (width == 0 || height == 0)
-        throw InvalidInputError(name + " declares an empty image (" + std::to_string(width) +
-                                " x " + std::to_string(height) + "); re-export the texture");
-      sawIhdr = true;
-    }
-    sawIdat = sawIdat || type == "IDAT";
-    if (type == "IEND") break;
-    pos += kChunkOverhead + length;
-  }
-  if (!sawIdat) throw InvalidInputError(name + " is corrupt (the PNG holds no image data)");
-}
-
-/// Opens `bytes` (whose format is `kind`) with OpenImageIO and decodes them.
-Image decodeBytes(std::span<const unsigned char> bytes, FileKind kind, const std::string& name) {
-  if (kind == FileKind::Png) checkPngStructure(bytes, name);
-  // The reader is chosen by the extension of this stand-in name; the bytes come from the proxy.
-  const std::string proxyName = "texgrad-memory." + std::string(kindExtension(kind));
-  OIIO::Filesystem::IOMemReader proxy(bytes.data(), bytes.size());
-  OIIO::ImageSpec config = readerConfig();
-  // OIIO 2.4's readers take the proxy from this hint (the open() argument alone is dropped when
-  // a config is given).
-  OIIO::Filesystem::IOProxy* proxyPointer = &proxy;
-  config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxyPointer);
-  auto input = OIIO::ImageInput::open(proxyName, &config, &proxy);
-  if (!input)
-    throw InvalidInputError(name + " is truncated or corrupt: " + oneLine(OIIO::geterror()));
-  Image image = decode(*input, name);
-  input->close();
-  return image;
 }
 
 /// Format actually stored for a requested one: JPEG is 8-bit only, PNG integer only (float goes
@@ -320,19 +159,23 @@ FileKind writableKind(const std::filesystem::path& path) {
   return kind;
 }
 
+/// Writes `image` as `format` (already storable) into `temporary`, with the codec of `kind`.
 void encode(const std::filesystem::path& temporary, const std::filesystem::path& target,
-            const Image& image, PixelFormat format) {
+            FileKind kind, const Image& image, PixelFormat format) {
   const std::string where = "cannot write " + target.string() + ": ";
-  auto output = OIIO::ImageOutput::create(temporary.string());
-  if (!output) throw IoError(where + oneLine(OIIO::geterror()));
-  if (!output->open(temporary.string(), outputSpec(image, typeOf(format))))
-    throw IoError(where + oneLine(output->geterror()));
-  if (!writeScanlines(*output, image, typeOf(format))) {
-    const std::string message = oneLine(output->geterror());
-    output->close();
-    throw IoError(where + message);
+  switch (kind) {
+    case FileKind::Png:
+      return codec::writePng(temporary, image, format != PixelFormat::UInt8, where);
+    case FileKind::Jpeg:
+      return codec::writeJpeg(temporary, image, where);
+    case FileKind::Exr:
+      return codec::writeExr(temporary, image, format == PixelFormat::Half, where);
+    case FileKind::Tiff:
+      return codec::writeTiff(temporary, image, format, where);
+    case FileKind::Unknown:
+      break;
   }
-  if (!output->close()) throw IoError(where + oneLine(output->geterror()));
+  throw UnsupportedError(where + "unknown image extension");
 }
 
 }  // namespace
@@ -349,17 +192,12 @@ Image readImage(const std::filesystem::path& path) {
   if (expected != FileKind::Unknown && content != expected)
     throw InvalidInputError(name + " is not " + withArticle(kindName(expected)) +
                             " file (content looks like " + describeContent(bytes) + ")");
-  if (content != FileKind::Unknown) return decodeBytes(bytes, content, name);
-
-  // Another extension: let OpenImageIO try its other readers (Targa, Radiance HDR, ...).
-  const OIIO::ImageSpec config = readerConfig();
-  auto input = OIIO::ImageInput::open(name, &config);
-  if (!input)
-    throw InvalidInputError("cannot read " + name + ": " + oneLine(OIIO::geterror()) +
-                            " (texgrad reads PNG, JPEG, OpenEXR and TIFF)");
-  Image image = decode(*input, name);
-  input->close();
-  return image;
+  if (content == FileKind::Unknown)
+    throw UnsupportedError("cannot read " + name + ": its content looks like " +
+                           describeContent(bytes) +
+                           "; texgrad reads PNG, JPEG, OpenEXR and TIFF (convert it first, e.g. "
+                           "oiiotool IN -o OUT.png)");
+  return decodeBytes(bytes, content, name);
 }
 
 std::pair<int, int> readImageSize(const std::filesystem::path& path) {
@@ -367,21 +205,33 @@ std::pair<int, int> readImageSize(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     throw IoError("cannot open " + name + ": No such file");
-  const OIIO::ImageSpec config = readerConfig();
-  auto input = OIIO::ImageInput::open(name, &config);
-  if (!input) throw InvalidInputError("cannot read " + name + ": " + oneLine(OIIO::geterror()));
-  const std::pair<int, int> size{input->spec().width, input->spec().height};
-  input->close();
-  return size;
+  std::array<unsigned char, kMagicBytes> head{};
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot open " + name + ": permission denied or unreadable");
+  in.read(reinterpret_cast<char*>(head.data()), static_cast<std::streamsize>(head.size()));
+  const std::span<const unsigned char> start(head.data(), static_cast<size_t>(in.gcount()));
+  const FileKind expected = kindOfExtension(path), content = kindOfContent(start);
+  if (expected != FileKind::Unknown && content != expected)
+    throw InvalidInputError(name + " is not " + withArticle(kindName(expected)) +
+                            " file (content looks like " + describeContent(start) + ")");
+  switch (content) {
+    case FileKind::Png:
+      return codec::pngSize(path);
+    case FileKind::Jpeg:
+      return codec::jpegSize(path);
+    case FileKind::Exr:
+      return codec::exrSize(path);
+    case FileKind::Tiff:
+      return codec::tiffSize(path);
+    case FileKind::Unknown:
+      break;
+  }
+  throw UnsupportedError("cannot read " + name + ": its content looks like " +
+                         describeContent(start) + "; texgrad reads PNG, JPEG, OpenEXR and TIFF");
 }
 
 Image readImageFromMemory(const std::vector<unsigned char>& bytes, const std::string& name) {
-  const FileKind kind = kindOfContent(bytes);
-  if (kind == FileKind::Unknown)
-    throw InvalidInputError(name +
-                            " is not a PNG, JPEG, OpenEXR or TIFF image (content looks like " +
-                            describeContent(bytes) + ")");
-  return decodeBytes(bytes, kind, name);
+  return decodeBytes(bytes, kindOfContent(bytes), name);
 }
 
 PixelFormat writeImage(const std::filesystem::path& path, const Image& image,
@@ -403,7 +253,7 @@ PixelFormat writeImage(const std::filesystem::path& path, const Image& image,
                            " channels");
   const PixelFormat stored = storableFormat(kind, format.value_or(image.format));
   writeAtomically(path, [&](const std::filesystem::path& temporary) {
-    encode(temporary, path, image, stored);
+    encode(temporary, path, kind, image, stored);
   });
   return stored;
 }
@@ -454,63 +304,6 @@ PixelFormat parsePixelFormat(const std::string& text) {
   if (key == "half") return PixelFormat::Half;
   if (key == "float") return PixelFormat::Float;
   throw InvalidInputError("unknown pixel format '" + text + "'; use 8, 16, half or float");
-}
-
-OIIO::ImageSpec outputSpec(const Image& image, OIIO::TypeDesc type) {
-  OIIO::ImageSpec spec(image.width, image.height, image.channels, type);
-  static const std::array<std::vector<std::string>, kMaxChannels> names{
-      {{"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}}};
-  spec.channelnames = names[static_cast<size_t>(image.channels - 1)];
-  spec.alpha_channel = (image.channels == 2 || image.channels == 4) ? image.channels - 1 : -1;
-  spec.attribute("oiio:UnassociatedAlpha", 1);
-  return spec;
-}
-
-// OpenImageIO messages may span lines; texgrad errors are one line.
-std::string oneLine(std::string message) {
-  for (char& c : message)
-    if (c == '\n' || c == '\r') c = ' ';
-  while (!message.empty() && message.back() == ' ') message.pop_back();
-  return message.empty() ? std::string("unknown OpenImageIO error") : message;
-}
-
-namespace {
-
-/// Rows per strip of writeScanlines: 64 rows of a 16384-wide RGBA float image are 16 MB.
-constexpr int kStripRows = 64;
-
-/// Writes the file rows [0, height) of `image` as samples of type T, a strip at a time.
-template <typename T>
-bool writeStrips(OIIO::ImageOutput& output, const Image& image, OIIO::TypeDesc type) {
-  const size_t row = static_cast<size_t>(image.width) * static_cast<size_t>(image.channels);
-  std::vector<T> strip(row * static_cast<size_t>(std::min(kStripRows, image.height)));
-  for (int first = 0; first < image.height; first += kStripRows) {
-    const int end = std::min(first + kStripRows, image.height);
-    for (int y = first; y < end; ++y) {
-      // File row y (top first) is texel row height - 1 - y (texel rows go upward).
-      const float* from = image.pixels.data() + static_cast<size_t>(image.height - 1 - y) * row;
-      T* to = strip.data() + static_cast<size_t>(y - first) * row;
-      for (size_t k = 0; k < row; ++k) {
-        if constexpr (std::is_integral_v<T>) {
-          constexpr float levels = static_cast<float>(std::numeric_limits<T>::max());
-          const float clamped = std::isnan(from[k]) ? 0.0f : std::clamp(from[k], 0.0f, 1.0f);
-          to[k] = static_cast<T>(std::lround(clamped * levels));
-        } else {
-          to[k] = from[k];
-        }
-      }
-    }
-    if (!output.write_scanlines(first, end, 0, type, strip.data())) return false;
-  }
-  return true;
-}
-
-}  // namespace
-
-bool writeScanlines(OIIO::ImageOutput& output, const Image& image, OIIO::TypeDesc type) {
-  if (type == OIIO::TypeDesc::UINT8) return writeStrips<uint8_t>(output, image, type);
-  if (type == OIIO::TypeDesc::UINT16) return writeStrips<uint16_t>(output, image, type);
-  return writeStrips<float>(output, image, OIIO::TypeDesc::FLOAT);  // OpenImageIO converts
 }
 
 }  // namespace texgrad

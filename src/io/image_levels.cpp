@@ -1,25 +1,20 @@
-// 8-bit levels of an image and back, exact both ways: a level's value is the one OpenImageIO
-// decodes it to (readImage asks OpenImageIO for floats), taken from OpenImageIO itself.
+// 8-bit levels of an image and back, exact both ways: a level's value is the one the image
+// codecs decode it to (codec::levelValue).
 #include "texgrad/io/image_levels.h"
-
-#include <OpenImageIO/imageio.h>
 
 #include <array>
 #include <cmath>
 #include <limits>
-#include <numeric>
+
+#include "image_codecs.h"
 
 namespace texgrad {
 
-// OpenImageIO's own conversion: level * (1 / 255.0f) in OpenImageIO 2.4.
 const std::array<float, kByteLevels>& byteLevelValues() {
   static const std::array<float, kByteLevels> values = [] {
-    std::array<uint8_t, kByteLevels> levels{};
-    std::iota(levels.begin(), levels.end(), uint8_t{0});
     std::array<float, kByteLevels> v{};
-    if (!OIIO::convert_pixel_values(OIIO::TypeDesc::UINT8, levels.data(), OIIO::TypeDesc::FLOAT,
-                                    v.data(), kByteLevels))
-      v.fill(std::numeric_limits<float>::quiet_NaN());  // no value then matches a level
+    for (int level = 0; level < kByteLevels; ++level)
+      v[static_cast<size_t>(level)] = codec::levelValue(static_cast<uint8_t>(level));
     return v;
   }();
   return values;

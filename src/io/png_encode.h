@@ -14,7 +14,7 @@ void checkImage(const Image& image, const std::string& where);
 
 /// Encodes `image` (texel order, v up) as PNG bytes, top row first: 8-bit for UInt8, 16-bit for
 /// the other formats; samples are clamped to [0, 1] (NaN as 0) and rounded. Throws IoError
-/// prefixed by `where` if OpenImageIO fails.
+/// prefixed by `where` if libpng fails.
 std::vector<unsigned char> encodePng(const Image& image, PixelFormat format,
                                      const std::string& where);
 

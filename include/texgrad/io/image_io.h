@@ -1,4 +1,5 @@
-// Image file I/O (PNG 8/16-bit, JPEG, EXR, TIFF) through OpenImageIO, with the one v-flip.
+// Image file I/O (PNG 8/16-bit, JPEG, EXR, TIFF) through each format's library, with the one
+// v-flip.
 #pragma once
 
 #include <filesystem>
@@ -16,7 +17,8 @@ namespace texgrad {
 Image readImage(const std::filesystem::path& path);
 
 /// The width and height of an image file, read from its header (no pixels are decoded); throws
-/// IoError if it is missing, InvalidInputError if OpenImageIO cannot open it.
+/// IoError if it is missing, InvalidInputError if its header cannot be read, UnsupportedError if
+/// it is none of PNG, JPEG, OpenEXR and TIFF.
 std::pair<int, int> readImageSize(const std::filesystem::path& path);
 
 /// Decodes an image held in memory (e.g. embedded in a GLB); `name` is used in messages.

@@ -1,0 +1,187 @@
+// JPEG through libjpeg-turbo. libjpeg reports an error through error_exit, which here jumps back
+// (longjmp) to the function that called it: those functions hold no object with a destructor
+// (buffers and the image belong to their caller), so no destructor is ever skipped.
+#include <array>
+#include <csetjmp>
+#include <cstdio>
+#include <memory>
+
+// jpeglib.h needs FILE and size_t declared first.
+#include <jpeglib.h>
+
+#include "image_codecs.h"
+#include "texgrad/core/error.h"
+
+namespace texgrad::codec {
+namespace {
+
+/// libjpeg's error manager with the jump point and the first message (a fixed buffer).
+struct JpegErrors {
+  jpeg_error_mgr manager{};
+  std::jmp_buf jump{};
+  std::array<char, JMSG_LENGTH_MAX> first{};
+  bool warned = false;
+};
+
+void keepMessage(j_common_ptr info) {
+  auto* errors = reinterpret_cast<JpegErrors*>(info->err);
+  if (errors->first[0] == '\0') info->err->format_message(info, errors->first.data());
+}
+
+[[noreturn]] void onJpegError(j_common_ptr info) {
+  keepMessage(info);
+  std::longjmp(reinterpret_cast<JpegErrors*>(info->err)->jump, 1);
+}
+
+/// Level -1 is a warning (a premature end, corrupt data, which libjpeg fills with grey): kept,
+/// so that the image is refused; trace messages (levels >= 0) are dropped. Nothing is printed.
+void onJpegMessage(j_common_ptr info, int level) {
+  if (level >= 0) return;
+  keepMessage(info);
+  reinterpret_cast<JpegErrors*>(info->err)->warned = true;
+}
+
+void installErrors(JpegErrors& errors) {
+  jpeg_std_error(&errors.manager);
+  errors.manager.error_exit = onJpegError;
+  errors.manager.emit_message = onJpegMessage;
+  errors.manager.output_message = [](j_common_ptr) {};
+}
+
+/// libjpeg's decompressor for the lifetime of one decode.
+struct JpegReader {
+  jpeg_decompress_struct info{};
+  JpegErrors errors;
+
+  JpegReader() {
+    installErrors(errors);
+    info.err = &errors.manager;
+    jpeg_create_decompress(&info);  // only fails on a version mismatch, which the build rules out
+  }
+  ~JpegReader() { jpeg_destroy_decompress(&info); }
+  JpegReader(const JpegReader&) = delete;
+  JpegReader& operator=(const JpegReader&) = delete;
+};
+
+/// Reads the header from `source` (memory, or a file when `bytes` is empty) and starts
+/// decompression into grey or RGB samples; false on an error, or when `headerOnly` after the
+/// header. CMYK is left as libjpeg reads it (the caller refuses it).
+bool startDecompress(JpegReader* reader, Bytes bytes, std::FILE* file, bool headerOnly) {
+  if (setjmp(reader->errors.jump)) return false;
+  jpeg_decompress_struct& info = reader->info;
+  if (file)
+    jpeg_stdio_src(&info, file);
+  else
+    jpeg_mem_src(&info, bytes.data(), static_cast<unsigned long>(bytes.size()));
+  jpeg_read_header(&info, TRUE);
+  if (headerOnly) return true;
+  if (info.jpeg_color_space == JCS_GRAYSCALE)
+    info.out_color_space = JCS_GRAYSCALE;
+  else if (info.jpeg_color_space != JCS_CMYK && info.jpeg_color_space != JCS_YCCK)
+    info.out_color_space = JCS_RGB;
+  else
+    return true;
+  jpeg_start_decompress(&info);
+  return true;
+}
+
+/// Decodes every scanline into `image` through `row`; false on an error.
+bool readScanlines(JpegReader* reader, unsigned char* row, Image* image) {
+  if (setjmp(reader->errors.jump)) return false;
+  jpeg_decompress_struct& info = reader->info;
+  while (info.output_scanline < info.output_height) {
+    const int y = static_cast<int>(info.output_scanline);
+    JSAMPROW rows[1] = {row};
+    jpeg_read_scanlines(&info, rows, 1);
+    levelsToRow(row, *image, y);
+  }
+  jpeg_finish_decompress(&info);
+  return true;
+}
+
+std::string corrupt(const std::string& name, const JpegErrors& errors) {
+  return name + " is truncated or corrupt: " + oneLine(errors.first.data());
+}
+
+/// libjpeg's compressor for the lifetime of one encode.
+struct JpegWriter {
+  jpeg_compress_struct info{};
+  JpegErrors errors;
+
+  JpegWriter() {
+    installErrors(errors);
+    info.err = &errors.manager;
+    jpeg_create_compress(&info);
+  }
+  ~JpegWriter() { jpeg_destroy_compress(&info); }
+  JpegWriter(const JpegWriter&) = delete;
+  JpegWriter& operator=(const JpegWriter&) = delete;
+};
+
+/// Quality of written JPEGs: visually lossless, as texture pipelines expect.
+constexpr int kQuality = 98;
+
+/// Compresses `image` (1 or 3 channels) into `file` through `row`; false on an error.
+bool writeScanlines(JpegWriter* writer, const Image& image, std::FILE* file, unsigned char* row) {
+  if (setjmp(writer->errors.jump)) return false;
+  jpeg_compress_struct& info = writer->info;
+  jpeg_stdio_dest(&info, file);
+  info.image_width = static_cast<JDIMENSION>(image.width);
+  info.image_height = static_cast<JDIMENSION>(image.height);
+  info.input_components = image.channels;
+  info.in_color_space = image.channels == 1 ? JCS_GRAYSCALE : JCS_RGB;
+  jpeg_set_defaults(&info);
+  jpeg_set_quality(&info, kQuality, TRUE);
+  jpeg_start_compress(&info, TRUE);
+  for (int y = 0; y < image.height; ++y) {
+    quantiseRow(image, y, row);
+    JSAMPROW rows[1] = {row};
+    jpeg_write_scanlines(&info, rows, 1);
+  }
+  jpeg_finish_compress(&info);
+  return true;
+}
+
+}  // namespace
+
+Image decodeJpeg(Bytes bytes, const std::string& name) {
+  JpegReader reader;
+  if (!startDecompress(&reader, bytes, nullptr, false) || reader.errors.warned)
+    throw InvalidInputError(corrupt(name, reader.errors));
+  const jpeg_decompress_struct& info = reader.info;
+  if (info.jpeg_color_space == JCS_CMYK || info.jpeg_color_space == JCS_YCCK)
+    throw UnsupportedError(name + " is a CMYK JPEG; convert it to RGB first (e.g. oiiotool " +
+                           name + " --ch R,G,B -o OUT.png)");
+  checkDeclaredImage(static_cast<int>(info.output_width), static_cast<int>(info.output_height),
+                     info.output_components, name);
+  Image image(static_cast<int>(info.output_width), static_cast<int>(info.output_height),
+              info.output_components, PixelFormat::UInt8);
+  std::vector<unsigned char> row(static_cast<size_t>(image.width) *
+                                 static_cast<size_t>(image.channels));
+  if (!readScanlines(&reader, row.data(), &image) || reader.errors.warned)
+    throw InvalidInputError(corrupt(name, reader.errors));
+  return image;
+}
+
+Size jpegSize(const std::filesystem::path& path) {
+  const std::unique_ptr<std::FILE, int (*)(std::FILE*)> in(std::fopen(path.c_str(), "rb"),
+                                                           std::fclose);
+  if (!in) throw IoError("cannot open " + path.string() + ": permission denied or unreadable");
+  JpegReader reader;
+  if (!startDecompress(&reader, {}, in.get(), true))
+    throw InvalidInputError("cannot read the header of " + path.string() + ": " +
+                            oneLine(reader.errors.first.data()));
+  return {static_cast<int>(reader.info.image_width), static_cast<int>(reader.info.image_height)};
+}
+
+void writeJpeg(const std::filesystem::path& file, const Image& image, const std::string& where) {
+  OutputFile out(file, where);
+  JpegWriter writer;
+  std::vector<unsigned char> row(static_cast<size_t>(image.width) *
+                                 static_cast<size_t>(image.channels));
+  if (!writeScanlines(&writer, image, out.get(), row.data()))
+    throw IoError(where + oneLine(writer.errors.first.data()));
+  out.close();
+}
+
+}  // namespace texgrad::codec
