@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
+#include <fstream>
 
 #include "image_codecs.h"
 #include "texgrad/core/error.h"
@@ -62,14 +63,44 @@ std::vector<std::string> orderedChannels(const Imf::ChannelList& list) {
   return names;
 }
 
-/// Reads the header of the first part (the stream is then past it); throws OpenEXR's exceptions.
-Imf::Header readHeader(Imf::IStream& stream) {
+/// Reads a null-terminated header string of at most 255 characters (OpenEXR's long-name limit).
+std::string readName(Imf::IStream& stream) {
+  std::string name;
+  char c = 0;
+  while (stream.read(&c, 1), c != '\0') {
+    if (name.size() == 255) throw Iex::InputExc("header name too long");
+    name.push_back(c);
+  }
+  return name;
+}
+
+/// Checks that every attribute of the first header fits in the file's `size` bytes before
+/// OpenEXR reads it: OpenEXR allocates (and fills) what an attribute declares, so a few hundred
+/// corrupt bytes could otherwise cost gigabytes. The stream is left just past the header.
+void checkAttributeSizes(Imf::IStream& stream, uint64_t size) {
+  while (!readName(stream).empty()) {
+    readName(stream);  // the attribute's type
+    std::array<char, 4> length{};
+    stream.read(length.data(), 4);
+    int32_t bytes = 0;
+    std::memcpy(&bytes, length.data(), 4);  // little-endian in the file, as on texgrad's hosts
+    if (bytes < 0 || static_cast<uint64_t>(bytes) > size - stream.tellg())
+      throw Iex::InputExc("a header attribute runs past the end of the file");
+    stream.seekg(stream.tellg() + static_cast<uint64_t>(bytes));
+  }
+}
+
+/// Reads the header of the first part of a file of `size` bytes (the stream is then past it);
+/// throws OpenEXR's exceptions.
+Imf::Header readHeader(Imf::IStream& stream, uint64_t size) {
   std::array<char, 8> start{};  // magic number and version (OpenEXR file layout)
   stream.read(start.data(), static_cast<int>(start.size()));
   int32_t magic = 0, version = 0;
   std::memcpy(&magic, start.data(), 4);  // little-endian in the file, as on texgrad's hosts
   std::memcpy(&version, start.data() + 4, 4);
   if (magic != 20000630) throw Iex::InputExc("not an OpenEXR file");
+  checkAttributeSizes(stream, size);
+  stream.seekg(start.size());
   Imf::Header header;
   int readVersion = version;
   header.readFrom(stream, readVersion);
@@ -160,7 +191,8 @@ Image decodeExr(Bytes bytes, const std::string& name) {
   try {
     MemoryStream stream(bytes, name);
     // The header is checked before OpenEXR sizes its buffers from it.
-    const std::vector<std::string> channels = checkedChannels(readHeader(stream), name);
+    const std::vector<std::string> channels =
+        checkedChannels(readHeader(stream, bytes.size()), name);
     stream.seekg(0);
     Imf::InputFile file(stream, 1);
     if (!file.isComplete())
@@ -180,7 +212,8 @@ Image decodeExr(Bytes bytes, const std::string& name) {
 Size exrSize(const std::filesystem::path& path) {
   try {
     Imf::StdIFStream stream(path.c_str());
-    return windowSize(readHeader(stream).dataWindow(), path.string());
+    return windowSize(readHeader(stream, std::filesystem::file_size(path)).dataWindow(),
+                      path.string());
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {
@@ -197,11 +230,22 @@ void writeExr(const std::filesystem::path& file, const Image& image, bool half,
     Imf::Header header(image.width, image.height);  // ZIP compression, increasing rows
     for (const std::string& channel : channels)
       header.channels().insert(channel, Imf::Channel(half ? Imf::HALF : Imf::FLOAT));
-    Imf::OutputFile out(file.c_str(), header, 1);
-    if (half)
-      writeStrips<Imath::half>(out, image, channels);
-    else
-      writeStrips<float>(out, image, channels);
+    // OpenEXR closes a file it opened itself in its destructor, where a failed write (a full
+    // disk) goes unnoticed: the stream is ours, and checked once OpenEXR is done with it.
+    std::ofstream bytes(file, std::ios::binary);
+    if (!bytes) throw IoError(where + "cannot create the file");
+    {
+      Imf::StdOFStream stream(bytes, file.c_str());
+      Imf::OutputFile out(stream, header, 1);
+      if (half)
+        writeStrips<Imath::half>(out, image, channels);
+      else
+        writeStrips<float>(out, image, channels);
+    }
+    bytes.close();
+    if (!bytes) throw IoError(where + "writing failed (disk full?)");
+  } catch (const Error&) {
+    throw;
   } catch (const std::exception& e) {
     throw IoError(where + oneLineOf(e));
   }

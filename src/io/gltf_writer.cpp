@@ -262,6 +262,9 @@ int releaseImageBytes(tinygltf::Model& model, int image) {
                                                other.byteOffset >= end && &other != &view;
                                       });
   const size_t cut = bytesAfter ? (end - start) / 4 * 4 : data.size() - start;
+  // The new image goes into buffer 0: another buffer emptied would be left as an empty one,
+  // which glTF readers refuse, so its bytes stay (the view is not reused).
+  if (cut == data.size() && view.buffer != 0) return -1;
   data.erase(data.begin() + static_cast<std::ptrdiff_t>(start),
              data.begin() + static_cast<std::ptrdiff_t>(start + cut));
   for (auto& other : model.bufferViews)

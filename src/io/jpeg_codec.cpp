@@ -63,10 +63,8 @@ struct JpegReader {
   JpegReader& operator=(const JpegReader&) = delete;
 };
 
-/// Reads the header from `source` (memory, or a file when `bytes` is empty) and starts
-/// decompression into grey or RGB samples; false on an error, or when `headerOnly` after the
-/// header. CMYK is left as libjpeg reads it (the caller refuses it).
-bool startDecompress(JpegReader* reader, Bytes bytes, std::FILE* file, bool headerOnly) {
+/// Reads the header from `bytes`, or from `file` if given; false on an error.
+bool readHeader(JpegReader* reader, Bytes bytes, std::FILE* file) {
   if (setjmp(reader->errors.jump)) return false;
   jpeg_decompress_struct& info = reader->info;
   if (file)
@@ -74,13 +72,20 @@ bool startDecompress(JpegReader* reader, Bytes bytes, std::FILE* file, bool head
   else
     jpeg_mem_src(&info, bytes.data(), static_cast<unsigned long>(bytes.size()));
   jpeg_read_header(&info, TRUE);
-  if (headerOnly) return true;
-  if (info.jpeg_color_space == JCS_GRAYSCALE)
-    info.out_color_space = JCS_GRAYSCALE;
-  else if (info.jpeg_color_space != JCS_CMYK && info.jpeg_color_space != JCS_YCCK)
-    info.out_color_space = JCS_RGB;
-  else
-    return true;
+  return true;
+}
+
+bool isCmyk(const jpeg_decompress_struct& info) {
+  return info.jpeg_color_space == JCS_CMYK || info.jpeg_color_space == JCS_YCCK;
+}
+
+/// Starts decompression into grey or RGB samples (not CMYK); false on an error. A progressive
+/// file is decoded whole here, into coefficient buffers sized by its header: call it only once
+/// that size is checked.
+bool startDecompress(JpegReader* reader) {
+  if (setjmp(reader->errors.jump)) return false;
+  jpeg_decompress_struct& info = reader->info;
+  info.out_color_space = info.jpeg_color_space == JCS_GRAYSCALE ? JCS_GRAYSCALE : JCS_RGB;
   jpeg_start_decompress(&info);
   return true;
 }
@@ -146,14 +151,16 @@ bool writeScanlines(JpegWriter* writer, const Image& image, std::FILE* file, uns
 
 Image decodeJpeg(Bytes bytes, const std::string& name) {
   JpegReader reader;
-  if (!startDecompress(&reader, bytes, nullptr, false) || reader.errors.warned)
+  if (!readHeader(&reader, bytes, nullptr) || reader.errors.warned)
     throw InvalidInputError(corrupt(name, reader.errors));
   const jpeg_decompress_struct& info = reader.info;
-  if (info.jpeg_color_space == JCS_CMYK || info.jpeg_color_space == JCS_YCCK)
+  if (isCmyk(info))
     throw UnsupportedError(name + " is a CMYK JPEG; convert it to RGB first (e.g. oiiotool " +
                            name + " --ch R,G,B -o OUT.png)");
-  checkDeclaredImage(static_cast<int>(info.output_width), static_cast<int>(info.output_height),
-                     info.output_components, name);
+  checkDeclaredImage(static_cast<int>(info.image_width), static_cast<int>(info.image_height),
+                     info.jpeg_color_space == JCS_GRAYSCALE ? 1 : 3, name);
+  if (!startDecompress(&reader) || reader.errors.warned)
+    throw InvalidInputError(corrupt(name, reader.errors));
   Image image(static_cast<int>(info.output_width), static_cast<int>(info.output_height),
               info.output_components, PixelFormat::UInt8);
   std::vector<unsigned char> row(static_cast<size_t>(image.width) *
@@ -168,7 +175,7 @@ Size jpegSize(const std::filesystem::path& path) {
                                                            std::fclose);
   if (!in) throw IoError("cannot open " + path.string() + ": permission denied or unreadable");
   JpegReader reader;
-  if (!startDecompress(&reader, {}, in.get(), true))
+  if (!readHeader(&reader, {}, in.get()))
     throw InvalidInputError("cannot read the header of " + path.string() + ": " +
                             oneLine(reader.errors.first.data()));
   return {static_cast<int>(reader.info.image_width), static_cast<int>(reader.info.image_height)};

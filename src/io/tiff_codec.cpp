@@ -95,25 +95,27 @@ void unmapNothing(thandle_t, void*, toff_t) {}
 struct TiffLayout {
   uint32_t width = 0, height = 0;
   uint16_t samples = 1, bits = 1, sampleFormat = SAMPLEFORMAT_UINT, planar = PLANARCONFIG_CONTIG,
-           photometric = PHOTOMETRIC_MINISBLACK;
+           photometric = PHOTOMETRIC_MINISBLACK, extraSamples = 0,
+           orientation = ORIENTATION_TOPLEFT;
 
-  /// 8/16-bit integers or 32-bit floats, grey or RGB, interleaved: read as stored.
+  /// 8/16-bit integers or 32-bit floats, grey or RGB, interleaved or in planes: read as stored.
   bool direct() const {
     const bool integer = sampleFormat == SAMPLEFORMAT_UINT && (bits == 8 || bits == 16);
     const bool real = sampleFormat == SAMPLEFORMAT_IEEEFP && bits == 32;
     const bool colour = photometric == PHOTOMETRIC_MINISBLACK ||
                         (photometric == PHOTOMETRIC_RGB && samples >= 3);
-    return (integer || real) && colour && planar == PLANARCONFIG_CONTIG;
+    return (integer || real) && colour;
   }
   PixelFormat format() const {
     return bits == 8 ? PixelFormat::UInt8 : bits == 16 ? PixelFormat::UInt16 : PixelFormat::Float;
   }
-  /// Channels of the 8-bit RGBA reading of another layout: grey or colour, with alpha if any.
+  /// Channels of the 8-bit RGBA reading of another layout: grey or colour, with alpha if the
+  /// file has extra samples (CMYK's fourth sample is ink, not alpha).
   int rgbaChannels() const {
     const bool grey =
         photometric == PHOTOMETRIC_MINISBLACK || photometric == PHOTOMETRIC_MINISWHITE;
-    const bool alpha = samples > (grey ? 1 : 3);
-    return grey ? (alpha ? 2 : 1) : (alpha ? 4 : 3);
+    const int alpha = extraSamples > 0 ? 1 : 0;
+    return (grey ? 1 : 3) + alpha;
   }
 };
 
@@ -125,74 +127,113 @@ TiffLayout layoutOf(TIFF* tiff) {
   TIFFGetFieldDefaulted(tiff, TIFFTAG_BITSPERSAMPLE, &layout.bits);
   TIFFGetFieldDefaulted(tiff, TIFFTAG_SAMPLEFORMAT, &layout.sampleFormat);
   TIFFGetFieldDefaulted(tiff, TIFFTAG_PLANARCONFIG, &layout.planar);
+  TIFFGetFieldDefaulted(tiff, TIFFTAG_ORIENTATION, &layout.orientation);
+  uint16_t* extraTypes = nullptr;
+  TIFFGetFieldDefaulted(tiff, TIFFTAG_EXTRASAMPLES, &layout.extraSamples, &extraTypes);
   if (!TIFFGetField(tiff, TIFFTAG_PHOTOMETRIC, &layout.photometric))
     layout.photometric = layout.samples >= 3 ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK;
   return layout;
 }
 
-/// `count` samples of `bits` bits (8, 16: integer levels; 32: float) as floats.
-void samplesToFloats(const unsigned char* from, size_t count, int bits, float* to) {
+/// `count` samples of `bits` bits (8, 16: integer levels; 32: float) as floats, into every
+/// `stride`-th float from `to`.
+void samplesToFloats(const unsigned char* from, size_t count, int bits, float* to,
+                     size_t stride) {
   for (size_t k = 0; k < count; ++k) {
+    float& value = to[k * stride];
     if (bits == 8) {
-      to[k] = levelValue(from[k]);
+      value = levelValue(from[k]);
     } else if (bits == 16) {
       uint16_t level = 0;
       std::memcpy(&level, from + 2 * k, 2);
-      to[k] = levelValue(level);
+      value = levelValue(level);
     } else {
-      std::memcpy(&to[k], from + 4 * k, 4);
+      std::memcpy(&value, from + 4 * k, 4);
     }
   }
 }
 
-/// Reads an interleaved 8/16-bit or float image, strips or tiles, into `image`; false on an error.
+/// Largest tile area accepted beyond the image's own: a tile may overhang the image, but a
+/// tiny file declaring huge tiles would otherwise allocate gigabytes.
+constexpr uint64_t kMinTileAreaBound = uint64_t{1} << 20;
+
+/// Reads 8/16-bit or float samples, strips or tiles, interleaved or one plane per channel, into
+/// `image` in file order (the Orientation tag is not applied, as OpenImageIO did not); false on
+/// an error.
 bool readDirect(TIFF* tiff, const TiffLayout& layout, Image& image) {
-  const int bits = layout.bits, channels = image.channels;
-  const size_t bytesPerTexel = static_cast<size_t>(channels) * static_cast<size_t>(bits / 8);
+  const int bits = layout.bits;
+  const bool planes = layout.planar == PLANARCONFIG_SEPARATE;
+  const int reads = planes ? image.channels : 1;            // one pass per plane
+  const size_t perTexel = planes ? 1 : image.channels;       // samples per texel in one read
+  const size_t stride = planes ? static_cast<size_t>(image.channels) : 1;
+  const size_t bytesPerTexel = perTexel * static_cast<size_t>(bits / 8);
   if (!TIFFIsTiled(tiff)) {
     std::vector<unsigned char> row(static_cast<size_t>(TIFFScanlineSize(tiff)));
-    for (uint32_t y = 0; y < layout.height; ++y) {
-      if (TIFFReadScanline(tiff, row.data(), y, 0) < 0) return false;
-      samplesToFloats(row.data(), image.pixels.size() / image.height, bits,
-                      fileRow(image, static_cast<int>(y)));
-    }
+    for (int s = 0; s < reads; ++s)
+      for (uint32_t y = 0; y < layout.height; ++y) {
+        if (TIFFReadScanline(tiff, row.data(), y, static_cast<uint16_t>(s)) < 0) return false;
+        samplesToFloats(row.data(), layout.width * perTexel, bits,
+                        fileRow(image, static_cast<int>(y)) + s, stride);
+      }
     return true;
   }
   uint32_t tileWidth = 0, tileHeight = 0;
   TIFFGetField(tiff, TIFFTAG_TILEWIDTH, &tileWidth);
   TIFFGetField(tiff, TIFFTAG_TILELENGTH, &tileHeight);
-  if (tileWidth == 0 || tileHeight == 0) return false;
-  std::vector<unsigned char> tile(static_cast<size_t>(TIFFTileSize(tiff)));
-  for (uint32_t y0 = 0; y0 < layout.height; y0 += tileHeight)
-    for (uint32_t x0 = 0; x0 < layout.width; x0 += tileWidth) {
-      if (TIFFReadTile(tiff, tile.data(), x0, y0, 0, 0) < 0) return false;
-      const uint32_t columns = std::min(tileWidth, layout.width - x0);
-      for (uint32_t r = 0; r < tileHeight && y0 + r < layout.height; ++r)
-        samplesToFloats(tile.data() + r * tileWidth * bytesPerTexel, columns * channels, bits,
-                        fileRow(image, static_cast<int>(y0 + r)) + x0 * channels);
-    }
+  std::vector<unsigned char> tile(uint64_t{tileWidth} * tileHeight * bytesPerTexel);
+  for (int s = 0; s < reads; ++s)
+    for (uint32_t y0 = 0; y0 < layout.height; y0 += tileHeight)
+      for (uint32_t x0 = 0; x0 < layout.width; x0 += tileWidth) {
+        if (TIFFReadTile(tiff, tile.data(), x0, y0, 0, static_cast<uint16_t>(s)) < 0)
+          return false;
+        const uint32_t columns = std::min(tileWidth, layout.width - x0);
+        for (uint32_t r = 0; r < tileHeight && y0 + r < layout.height; ++r)
+          samplesToFloats(tile.data() + r * tileWidth * bytesPerTexel, columns * perTexel, bits,
+                          fileRow(image, static_cast<int>(y0 + r)) + x0 * image.channels + s,
+                          stride);
+      }
   return true;
 }
 
-/// Reads any other layout through libtiff's 8-bit RGBA interface; false on an error.
-bool readRgba(TIFF* tiff, Image& image) {
+/// Throws InvalidInputError naming `name` unless the tiles of a tiled file have a sane size:
+/// not empty, and not far larger than the image (which would allocate gigabytes for a tiny file).
+void checkTiles(TIFF* tiff, const TiffLayout& layout, const std::string& name) {
+  if (!TIFFIsTiled(tiff)) return;
+  uint32_t tileWidth = 0, tileHeight = 0;
+  TIFFGetField(tiff, TIFFTAG_TILEWIDTH, &tileWidth);
+  TIFFGetField(tiff, TIFFTAG_TILELENGTH, &tileHeight);
+  const uint64_t area = uint64_t{tileWidth} * tileHeight;
+  if (area == 0 ||
+      area > std::max(kMinTileAreaBound, 4 * uint64_t{layout.width} * uint64_t{layout.height}))
+    throw InvalidInputError(name + " is corrupt: it declares " + std::to_string(tileWidth) +
+                            " x " + std::to_string(tileHeight) + " tiles for a " +
+                            std::to_string(layout.width) + " x " +
+                            std::to_string(layout.height) + " image");
+}
+
+/// Reads any other layout through libtiff's 8-bit RGBA interface, in file order like
+/// readDirect; false on an error.
+bool readRgba(TIFF* tiff, const TiffLayout& layout, Image& image) {
   std::vector<uint32_t> raster(static_cast<size_t>(image.width) *
                                static_cast<size_t>(image.height));
-  // Bottom-left origin: raster row 0 is the bottom row, texel row 0.
+  // Asked for the file's own orientation, libtiff returns the rows as stored: raster row 0 is
+  // the file's first row.
   if (!TIFFReadRGBAImageOriented(tiff, static_cast<uint32_t>(image.width),
                                  static_cast<uint32_t>(image.height), raster.data(),
-                                 ORIENTATION_BOTLEFT, 0))
+                                 layout.orientation, 0))
     return false;
   const bool colour = image.channels >= 3, alpha = image.channels % 2 == 0;
-  for (size_t t = 0; t < raster.size(); ++t) {
-    const uint32_t abgr = raster[t];
-    float* texel = image.pixels.data() + t * static_cast<size_t>(image.channels);
-    *texel++ = levelValue(static_cast<uint8_t>(TIFFGetR(abgr)));
-    if (colour) {
-      *texel++ = levelValue(static_cast<uint8_t>(TIFFGetG(abgr)));
-      *texel++ = levelValue(static_cast<uint8_t>(TIFFGetB(abgr)));
+  for (int y = 0; y < image.height; ++y) {
+    float* texel = fileRow(image, y);
+    for (int x = 0; x < image.width; ++x) {
+      const uint32_t abgr = raster[static_cast<size_t>(y) * image.width + x];
+      *texel++ = levelValue(static_cast<uint8_t>(TIFFGetR(abgr)));
+      if (colour) {
+        *texel++ = levelValue(static_cast<uint8_t>(TIFFGetG(abgr)));
+        *texel++ = levelValue(static_cast<uint8_t>(TIFFGetB(abgr)));
+      }
+      if (alpha) *texel++ = levelValue(static_cast<uint8_t>(TIFFGetA(abgr)));
     }
-    if (alpha) *texel = levelValue(static_cast<uint8_t>(TIFFGetA(abgr)));
   }
   return true;
 }
@@ -204,7 +245,7 @@ std::string problem(const TiffMessage& message) {
 /// Opens bytes in memory for reading; InvalidInputError naming `name` if libtiff refuses them.
 TiffHandle openMemory(MemoryFile* memory, TiffMessage* message, const std::string& name) {
   const auto options = openOptions(message);
-  TIFF* tiff = TIFFClientOpenExt(name.c_str(), "rm", memory, readMemory, writeNothing,
+  TIFF* tiff = TIFFClientOpenExt(name.c_str(), "r", memory, readMemory, writeNothing,
                                  seekMemory, closeNothing, sizeOfMemory, mapMemory,
                                  unmapNothing, options.get());
   if (!tiff) throw InvalidInputError(name + " is truncated or corrupt: " + problem(*message));
@@ -241,6 +282,11 @@ Image decodeTiff(Bytes bytes, const std::string& name) {
   const TiffLayout layout = layoutOf(tiff.get());
   const bool direct = layout.direct();
   const int channels = direct ? layout.samples : layout.rgbaChannels();
+  std::array<char, 1024> why{};
+  if (!direct && !TIFFRGBAImageOK(tiff.get(), why.data()))
+    throw UnsupportedError(name + ": " + oneLine(why.data()) +
+                           "; texgrad reads 8/16-bit and float grey or RGB(A) TIFFs and what "
+                           "libtiff turns into 8-bit RGBA (convert it, e.g. oiiotool IN -o OUT.tif)");
   if (layout.width > INT32_MAX || layout.height > INT32_MAX || layout.width == 0 ||
       layout.height == 0)
     throw InvalidInputError(name + " declares an impossible size (" +
@@ -248,9 +294,10 @@ Image decodeTiff(Bytes bytes, const std::string& name) {
                             std::to_string(layout.height) + ")");
   checkDeclaredImage(static_cast<int>(layout.width), static_cast<int>(layout.height), channels,
                      name);
+  checkTiles(tiff.get(), layout, name);
   Image image(static_cast<int>(layout.width), static_cast<int>(layout.height), channels,
               direct ? layout.format() : PixelFormat::UInt8);
-  if (!(direct ? readDirect(tiff.get(), layout, image) : readRgba(tiff.get(), image)) ||
+  if (!(direct ? readDirect(tiff.get(), layout, image) : readRgba(tiff.get(), layout, image)) ||
       message.text[0] != '\0')
     throw InvalidInputError(name + " is truncated or corrupt: " + problem(message));
   return image;

@@ -236,6 +236,37 @@ TEST(GltfWriter, SharedTextureOfAnotherSlotIsNotModified) {
   expectSameLevels(decodeSlot(copy, "baseColor"), gradientImage(8, 8, 3));
 }
 
+TEST(GltfWriter, ImageAloneInItsOwnBufferIsReplacedReadably) {
+  // The base colour image fills buffer 1 on its own: its replacement goes into buffer 0, and
+  // buffer 1 must not be left empty (glTF readers refuse a buffer of no bytes).
+  const fs::path dir = test::tempDir("gltf_writer_own_buffer");
+  writeImage(dir / "color.png", gradientImage(8, 8, 3));
+  std::ifstream in(dir / "color.png", std::ios::binary);
+  const std::string png{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  std::string asset = test::fixtures::triangleGltf("color.png", "normal.png");
+  const std::string image = R"({"uri":"color.png"})";
+  asset.replace(asset.find(image), image.size(), R"({"bufferView":3,"mimeType":"image/png"})");
+  const std::string views = R"({"buffer":0,"byteOffset":60,"byteLength":6})";
+  asset.replace(asset.find(views), views.size(),
+                views + R"(,{"buffer":1,"byteOffset":0,"byteLength":)" +
+                    std::to_string(png.size()) + "}");
+  const std::string buffersEnd = R"("}],
+  "bufferViews")";
+  asset.replace(asset.find(buffersEnd), buffersEnd.size(),
+                R"("},{"byteLength":)" + std::to_string(png.size()) +
+                    R"(,"uri":"data:application/octet-stream;base64,)" +
+                    test::fixtures::base64(png) + R"("}],
+  "bufferViews")");
+  const fs::path source = test::fixtures::write(dir, "m.gltf", asset);
+  writeImage(dir / "normal.png", gradientImage(4, 4, 3));
+  expectSameLevels(decodeSlot(readMesh(source), "baseColor"), gradientImage(8, 8, 3));
+  const Image replacement = gradientImage(16, 16, 3);
+  writeGltfWithTexture(source, dir / "out.gltf", "baseColor", replacement);
+  const TexturedMesh copy = readMesh(dir / "out.gltf");
+  expectSameLevels(decodeSlot(copy, "baseColor"), replacement);
+  expectSameLevels(decodeSlot(copy, "normal"), gradientImage(4, 4, 3));
+}
+
 TEST(GltfWriter, FloatImageIsStoredAs16Bit) {
   const fs::path dir = test::tempDir("gltf_writer_float");
   Image image = gradientImage(8, 8, 3, PixelFormat::Float);

@@ -1,20 +1,25 @@
 // The image codecs on layouts texgrad never writes but reads: files made by the format libraries
 // themselves (interlaced and palette PNGs, tiled and planar TIFFs, OpenEXR channel orders, CMYK
-// JPEGs), header sizes, and content no codec takes.
+// JPEGs and TIFFs), header sizes, content no codec takes, headers that declare far more than the
+// file holds (refused before any large allocation), and writes that fail.
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStringAttribute.h>
 #include <gtest/gtest.h>
 #include <png.h>
 #include <tiffio.h>
 
 #include <cstdio>
+#include <cstring>
 #include <fstream>
+#include <iterator>
 
 // jpeglib.h needs FILE and size_t declared first.
 #include <jpeglib.h>
 
+#include "io/image_codecs.h"
 #include "test_paths.h"
 #include "texgrad/core/error.h"
 #include "texgrad/io/image_io.h"
@@ -292,6 +297,160 @@ TEST(ImageCodecs, OtherFormatsAreUnsupportedAndNamed) {
       EXPECT_NE(what.find("BMP"), std::string::npos) << what;
       EXPECT_NE(what.find("PNG, JPEG, OpenEXR and TIFF"), std::string::npos) << what;
     }
+}
+
+std::string readBytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void writeBytes(const std::filesystem::path& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary) << bytes;
+}
+
+TEST(ImageCodecs, ProgressiveJpegDeclaringAHugeImageIsRefusedBeforeDecoding) {
+  const auto dir = tempDir("codec_jpeg_huge");
+  const auto path = dir / "huge.jpg";
+  {
+    std::FILE* file = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(file, nullptr);
+    jpeg_compress_struct info{};
+    jpeg_error_mgr errors{};
+    info.err = jpeg_std_error(&errors);
+    jpeg_create_compress(&info);
+    jpeg_stdio_dest(&info, file);
+    info.image_width = 8;
+    info.image_height = 8;
+    info.input_components = 3;
+    info.in_color_space = JCS_RGB;
+    jpeg_set_defaults(&info);
+    jpeg_simple_progression(&info);
+    jpeg_start_compress(&info, TRUE);
+    std::array<JSAMPLE, 8 * 3> row{};
+    for (int y = 0; y < 8; ++y) {
+      JSAMPROW rows[1] = {row.data()};
+      jpeg_write_scanlines(&info, rows, 1);
+    }
+    jpeg_finish_compress(&info);
+    jpeg_destroy_compress(&info);
+    std::fclose(file);
+  }
+  // The progressive frame header (SOF2): marker, length, precision, height, width.
+  std::string bytes = readBytes(path);
+  const size_t sof = bytes.find("\xff\xc2");
+  ASSERT_NE(sof, std::string::npos);
+  for (size_t at : {sof + 5, sof + 7}) {  // 40000 x 40000: 1.6 billion texels
+    bytes[at] = static_cast<char>(0x9c);
+    bytes[at + 1] = static_cast<char>(0x40);
+  }
+  writeBytes(path, bytes);
+  try {
+    readImage(path);
+    FAIL() << "an image beyond the size limit must be refused";
+  } catch (const UnsupportedError& e) {
+    EXPECT_NE(std::string(e.what()).find("40000 x 40000"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ImageCodecs, TiffDeclaringHugeTilesIsRefused) {
+  const auto dir = tempDir("codec_tiff_tiles");
+  const auto path = dir / "tiles.tif";
+  writeTiffWithLibtiff(path, 16, 16, TiffLayout::Tiles);
+  std::string bytes = readBytes(path);
+  ASSERT_EQ(bytes.substr(0, 2), "II");
+  uint32_t ifd = 0;
+  std::memcpy(&ifd, bytes.data() + 4, 4);
+  uint16_t entries = 0;
+  std::memcpy(&entries, bytes.data() + ifd, 2);
+  int patched = 0;
+  for (uint16_t e = 0; e < entries; ++e) {  // 12-byte entries: tag, type, count, value
+    char* entry = bytes.data() + ifd + 2 + 12 * e;
+    uint16_t tag = 0;
+    std::memcpy(&tag, entry, 2);
+    if (tag != TIFFTAG_TILEWIDTH && tag != TIFFTAG_TILELENGTH) continue;
+    const uint16_t tile = 4096;  // a multiple of 16, as TIFF requires; as SHORT or LONG
+    std::memset(entry + 8, 0, 4);
+    std::memcpy(entry + 8, &tile, 2);
+    ++patched;
+  }
+  ASSERT_EQ(patched, 2);
+  writeBytes(path, bytes);
+  try {
+    readImage(path);
+    FAIL() << "a 16 x 16 image in 4096 x 4096 tiles must be refused";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("4096 x 4096 tiles for a 16 x 16 image"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(ImageCodecs, ExrAttributeLongerThanTheFileIsRefused) {
+  const auto dir = tempDir("codec_exr_attribute");
+  const auto path = dir / "comment.exr";
+  {
+    Imf::Header header(2, 2);
+    header.channels().insert("Y", Imf::Channel(Imf::FLOAT));
+    header.insert("comments", Imf::StringAttribute("a texture"));
+    std::array<float, 4> pixels{};
+    Imf::FrameBuffer buffer;
+    buffer.insert("Y", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(pixels.data()),
+                                  sizeof(float), 2 * sizeof(float)));
+    Imf::OutputFile out(path.c_str(), header);
+    out.setFrameBuffer(buffer);
+    out.writePixels(2);
+  }
+  std::string bytes = readBytes(path);
+  const std::string attribute("comments\0string\0", 16);
+  const size_t at = bytes.find(attribute);
+  ASSERT_NE(at, std::string::npos);
+  const int32_t huge = 0x7fffffff;  // OpenEXR would allocate and fill 2 GB for it
+  std::memcpy(bytes.data() + at + attribute.size(), &huge, 4);
+  writeBytes(path, bytes);
+  for (auto read : {+[](const std::filesystem::path& p) { readImage(p); },
+                    +[](const std::filesystem::path& p) { readImageSize(p); }})
+    try {
+      read(path);
+      ADD_FAILURE() << "an attribute of 2 GB in a small file must be refused";
+    } catch (const InvalidInputError& e) {
+      EXPECT_NE(std::string(e.what()).find("runs past the end"), std::string::npos) << e.what();
+    }
+}
+
+TEST(ImageCodecs, CmykTiffIsColourWithoutAlphaInFileRowOrder) {
+  const auto dir = tempDir("codec_tiff_cmyk");
+  // Top row fully cyan (no red), bottom row no ink (white); the Orientation tag says the rows
+  // start at the bottom, which texgrad does not apply (nor did OpenImageIO), on any layout.
+  const auto path = dir / "cmyk.tif";
+  TIFF* tiff = TIFFOpen(path.c_str(), "w");
+  ASSERT_NE(tiff, nullptr);
+  TIFFSetField(tiff, TIFFTAG_IMAGEWIDTH, uint32_t{2});
+  TIFFSetField(tiff, TIFFTAG_IMAGELENGTH, uint32_t{2});
+  TIFFSetField(tiff, TIFFTAG_SAMPLESPERPIXEL, uint16_t{4});
+  TIFFSetField(tiff, TIFFTAG_BITSPERSAMPLE, uint16_t{8});
+  TIFFSetField(tiff, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_SEPARATED);
+  TIFFSetField(tiff, TIFFTAG_INKSET, INKSET_CMYK);
+  TIFFSetField(tiff, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+  TIFFSetField(tiff, TIFFTAG_ORIENTATION, ORIENTATION_BOTLEFT);
+  std::array<unsigned char, 8> cyan = {255, 0, 0, 0, 255, 0, 0, 0}, white{};
+  ASSERT_GE(TIFFWriteScanline(tiff, cyan.data(), 0, 0), 0);
+  ASSERT_GE(TIFFWriteScanline(tiff, white.data(), 1, 0), 0);
+  TIFFClose(tiff);
+  const Image image = readImage(path);
+  ASSERT_EQ(image.channels, 3) << "CMYK's fourth sample is ink, not alpha";
+  EXPECT_EQ(image.at(0, 1, 0), 0.0f) << "the file's first row is the top texel row";
+  EXPECT_EQ(image.at(0, 1, 1), 1.0f);
+  EXPECT_EQ(image.at(0, 0, 0), 1.0f);
+}
+
+TEST(ImageCodecs, AFailedWriteIsAnErrorInEveryFormat) {
+  // /dev/full takes the file's creation but fails every write, like a full disk.
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const Image image(64, 64, 3, PixelFormat::UInt8);
+  const std::string where = "w: ";
+  EXPECT_THROW(codec::writePng("/dev/full", image, false, where), IoError);
+  EXPECT_THROW(codec::writeJpeg("/dev/full", image, where), IoError);
+  EXPECT_THROW(codec::writeExr("/dev/full", image, true, where), IoError);
+  EXPECT_THROW(codec::writeTiff("/dev/full", image, PixelFormat::UInt8, where), IoError);
 }
 
 }  // namespace
