@@ -36,9 +36,9 @@ std::shared_ptr<TexelDomain> buildDomain(const TexturedMesh& mesh, int width, in
   });
 }
 
-/// A per-texel grid array over the image (H x W, row 0 = top) from a per-grid-texel vector.
-template <typename T, typename Source>
-py::array_t<T> imageGridArray(const TexelGrid& grid, const std::vector<Source>& values, T outside) {
+/// A per-texel grid array over the image (H x W, row 0 = top) of valueOf(t) at each grid texel t.
+template <typename T, typename ValueOf>
+py::array_t<T> imageGridArray(const TexelGrid& grid, const ValueOf& valueOf, T outside) {
   py::array_t<T> out(
       {static_cast<py::ssize_t>(grid.imageHeight), static_cast<py::ssize_t>(grid.imageWidth)});
   auto view = out.template mutable_unchecked<2>();
@@ -47,7 +47,7 @@ py::array_t<T> imageGridArray(const TexelGrid& grid, const std::vector<Source>& 
       const int x = i - grid.x0, y = j - grid.y0;
       const bool inGrid = x >= 0 && y >= 0 && x < grid.nx && y < grid.ny;
       view(grid.imageHeight - 1 - j, i) =
-          inGrid ? static_cast<T>(values[static_cast<size_t>(grid.texelIndex(x, y))]) : outside;
+          inGrid ? static_cast<T>(valueOf(static_cast<size_t>(grid.texelIndex(x, y)))) : outside;
     }
   return out;
 }
@@ -128,19 +128,22 @@ void registerDomain(py::module_& m) {
       .def_property_readonly(
           "texel_class",
           [](const TexelDomain& d) {
-            return imageGridArray<uint8_t>(d.grid(), d.grid().texelClass, 0);
+            const TexelGrid& g = d.grid();
+            return imageGridArray<uint8_t>(g, [&g](size_t t) { return g.texelClass[t]; }, 0);
           },
           "H x W uint8 (row 0 = top): 0 inactive, 1 interior, 2 boundary texel.")
       .def_property_readonly(
           "texel_chart",
           [](const TexelDomain& d) {
-            return imageGridArray<int32_t>(d.grid(), d.grid().texelChart, -1);
+            const TexelGrid& g = d.grid();
+            return imageGridArray<int32_t>(g, [&g](size_t t) { return g.chartOfTexel(t); }, -1);
           },
           "H x W int32: chart owning each texel, -1 if inactive.")
       .def_property_readonly(
           "unknown_index",
           [](const TexelDomain& d) {
-            return imageGridArray<int32_t>(d.grid(), d.grid().unknownOfTexel, -1);
+            const TexelGrid& g = d.grid();
+            return imageGridArray<int32_t>(g, [&g](size_t t) { return g.unknownOfTexel[t]; }, -1);
           },
           "H x W int32: unknown index of each texel, -1 if inactive.")
       .def_property_readonly(

@@ -46,9 +46,9 @@ void TexelDomain::releaseImageMaps(KeptMaps kept) {
         "(releaseOperators) first");
   if (kept == KeptMaps::None) {
     std::vector<TexelClass>().swap(grid_.texelClass);
-    std::vector<int32_t>().swap(grid_.texelChart);
+    std::vector<int32_t>().swap(grid_.chartOfUnknown);
+    grid_.unknownOfTexel.clear();
   }
-  std::vector<int32_t>().swap(grid_.unknownOfTexel);
   std::vector<int32_t>().swap(grid_.multiChartTexels);
   std::vector<CellCoverage>().swap(grid_.cellCoverage);
   std::vector<int32_t>().swap(grid_.overlapCells);

@@ -212,7 +212,7 @@ TexelStats texelStats(const TexelGrid& g) {
     const int i = x + g.x0, j = y + g.y0;
     const bool outside = !g.inImage(x, y);
     s.texelsOutsideImage += outside;
-    const int32_t chart = g.texelChart[t];
+    const int32_t chart = g.chartOfTexel(static_cast<size_t>(t));
     if (outside || i == 0 || j == 0 || i == g.imageWidth - 1 || j == g.imageHeight - 1) {
       if (touches.size() <= static_cast<size_t>(chart)) touches.resize(chart + 1, 0);
       touches[chart] = 1;

@@ -38,7 +38,7 @@ std::array<float, 3> texelColour(const TexelGrid& grid, int t, MaskKind kind,
                                                               : std::array<float, 3>{0, 0, 0};
     case MaskKind::Interior: return c == TexelClass::Interior ? std::array<float, 3>{1, 1, 1}
                                                               : std::array<float, 3>{0, 0, 0};
-    case MaskKind::Chart: return chartColour(grid.texelChart[static_cast<size_t>(t)]);
+    case MaskKind::Chart: return chartColour(grid.chartOfTexel(static_cast<size_t>(t)));
     case MaskKind::Coverage:
       return multiChart[static_cast<size_t>(t)] ? std::array<float, 3>{1, 0, 0}
                                                 : std::array<float, 3>{1, 1, 1};

@@ -29,9 +29,8 @@ void classifyCells(TexelGrid& g, const CellCover& cover) {
 void classifyTexels(TexelGrid& g, const PageVector<uint8_t>& severalChartsInCell) {
   const size_t texels = static_cast<size_t>(g.nx) * static_cast<size_t>(g.ny);
   g.texelClass.assign(texels, TexelClass::Inactive);
-  g.texelChart.assign(texels, -1);
-  g.unknownOfTexel.assign(texels, -1);
   g.texelOfUnknown.clear();
+  g.chartOfUnknown.clear();
   g.multiChartTexels.clear();
   for (int y = 0; y < g.ny; ++y)
     for (int x = 0; x < g.nx; ++x) {
@@ -51,11 +50,11 @@ void classifyTexels(TexelGrid& g, const PageVector<uint8_t>& severalChartsInCell
       if (covered == 0) continue;
       const int t = g.texelIndex(x, y);
       g.texelClass[t] = full == 4 && !severalCharts ? TexelClass::Interior : TexelClass::Boundary;
-      g.texelChart[t] = chart;
       if (severalCharts) g.multiChartTexels.push_back(t);
-      g.unknownOfTexel[t] = static_cast<int32_t>(g.texelOfUnknown.size());
       g.texelOfUnknown.push_back(t);
+      g.chartOfUnknown.push_back(chart);
     }
+  g.unknownOfTexel = TexelUnknowns(texels, g.texelOfUnknown);
 }
 
 }  // namespace

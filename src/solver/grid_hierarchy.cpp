@@ -65,14 +65,14 @@ GridLevel buildFinestLevel(const TexelGrid& grid, int chartCount) {
   std::vector<std::array<int, 4>> bounds(static_cast<size_t>(chartCount), emptyBounds());
   for (int u = 0; u < grid.unknownCount(); ++u) {
     const int t = grid.texelOfUnknown[static_cast<size_t>(u)];
-    growBounds(bounds[static_cast<size_t>(grid.texelChart[static_cast<size_t>(t)])], t % grid.nx,
+    growBounds(bounds[static_cast<size_t>(grid.chartOfUnknown[static_cast<size_t>(u)])], t % grid.nx,
                t / grid.nx);
   }
   layoutBoxes(level, bounds);
   reserveUnknowns(level, static_cast<size_t>(grid.unknownCount()));
   for (int u = 0; u < grid.unknownCount(); ++u) {
     const size_t t = static_cast<size_t>(grid.texelOfUnknown[static_cast<size_t>(u)]);
-    const int chart = grid.texelChart[t];
+    const int chart = grid.chartOfUnknown[static_cast<size_t>(u)];
     const int x = static_cast<int>(t) % grid.nx, y = static_cast<int>(t) / grid.nx;
     const GridBox& box = level.boxes[static_cast<size_t>(level.boxOfChart[static_cast<size_t>(chart)])];
     pushUnknown(level, box.slot(x, y), grid.texelClass[t] == TexelClass::Interior);
@@ -184,13 +184,13 @@ GridHierarchy GridHierarchy::build(const TexelGrid& grid, int maxLevels, int min
     throw InvalidInputError("GridHierarchy: maxLevels is " + std::to_string(maxLevels) +
                             ", expected >= 0");
   if (static_cast<int>(grid.texelOfUnknown.size()) != grid.unknownCount() ||
-      grid.texelChart.size() != static_cast<size_t>(grid.nx) * static_cast<size_t>(grid.ny) ||
-      grid.texelClass.size() != grid.texelChart.size())
+      grid.chartOfUnknown.size() != grid.texelOfUnknown.size() ||
+      grid.texelClass.size() != static_cast<size_t>(grid.nx) * static_cast<size_t>(grid.ny))
     throw InvalidInputError("GridHierarchy: TexelGrid arrays do not match its nx x ny size");
   GridHierarchy h;
   for (int u = 0; u < grid.unknownCount(); ++u) {
     const int t = grid.texelOfUnknown[static_cast<size_t>(u)];
-    const int chart = grid.texelChart[static_cast<size_t>(t)];
+    const int chart = grid.chartOfUnknown[static_cast<size_t>(u)];
     if (chart < 0)
       throw InvalidInputError("GridHierarchy: active texel " + std::to_string(t) +
                               " has no chart in the TexelGrid");

@@ -26,7 +26,7 @@ Image chartColours(const TexelDomain& domain, int w, int h) {
   for (int32_t t : g.texelOfUnknown) {
     const int x = t % g.nx, y = t / g.nx;
     if (!g.inImage(x, y)) continue;
-    const int chart = g.texelChart[t];
+    const int chart = g.chartOfTexel(static_cast<size_t>(t));
     for (int c = 0; c < 3; ++c)
       image.at(x + g.x0, y + g.y0, c) = static_cast<float>(((chart * 7 + c * 3) % 11) / 10.0);
   }

@@ -83,7 +83,8 @@ TEST(TexelGrid, UnknownNumberingIsABijectionInRowMajorOrder) {
     previous = t;
     EXPECT_EQ(g.unknownOfTexel[t], u);
     EXPECT_NE(g.texelClass[t], TexelClass::Inactive);
-    EXPECT_GE(g.texelChart[t], 0);
+    EXPECT_GE(g.chartOfUnknown[static_cast<size_t>(u)], 0);
+    EXPECT_EQ(g.chartOfTexel(static_cast<size_t>(t)), g.chartOfUnknown[static_cast<size_t>(u)]);
   }
 }
 
@@ -167,7 +168,7 @@ TEST(TexelGrid, InteriorTexelsHaveFourFullCellsOfTheirChart) {
       for (int b = y - 1; b <= y; ++b)
         for (int a = x - 1; a <= x; ++a) {
           ASSERT_EQ(g.cellCoverage[g.cellIndex(a, b)], CellCoverage::Full);
-          ASSERT_EQ(g.cellChart[g.cellIndex(a, b)], g.texelChart[g.texelIndex(x, y)]);
+          ASSERT_EQ(g.cellChart[g.cellIndex(a, b)], g.chartOfTexel(static_cast<size_t>(g.texelIndex(x, y))));
         }
     }
   EXPECT_GT(interior, 0);

@@ -72,7 +72,7 @@ TEST(TexelClasses, InteriorNeedsFourFullCellsOfOneChart) {
   EXPECT_EQ(classAt(g, 3, 3), TexelClass::Boundary);
   EXPECT_EQ(classAt(g, 4, 4), TexelClass::Inactive);
   EXPECT_EQ(classAt(g, 4, 0), TexelClass::Inactive);
-  EXPECT_EQ(g.texelChart[static_cast<size_t>(g.texelIndex(4, 4))], -1);
+  EXPECT_EQ(g.chartOfTexel(static_cast<size_t>(g.texelIndex(4, 4))), -1);
   EXPECT_TRUE(g.multiChartTexels.empty());
 }
 
@@ -88,10 +88,10 @@ TEST(TexelClasses, TexelsWhereChartsMeetAreBoundaryOwnedByTheSmallestChart) {
   EXPECT_EQ(coverageAt(g, 4, 2), CellCoverage::Partial);  // shared: never Full
   EXPECT_EQ(classAt(g, 1, 1), TexelClass::Interior);
   EXPECT_EQ(classAt(g, 2, 1), TexelClass::Boundary);
-  EXPECT_EQ(g.texelChart[static_cast<size_t>(g.texelIndex(2, 1))], 1);
-  EXPECT_EQ(g.texelChart[static_cast<size_t>(g.texelIndex(1, 1))], 3);
-  EXPECT_EQ(g.texelChart[static_cast<size_t>(g.texelIndex(4, 2))], 1);
-  EXPECT_EQ(g.texelChart[static_cast<size_t>(g.texelIndex(0, 2))], 3);  // one covered cell
+  EXPECT_EQ(g.chartOfTexel(static_cast<size_t>(g.texelIndex(2, 1))), 1);
+  EXPECT_EQ(g.chartOfTexel(static_cast<size_t>(g.texelIndex(1, 1))), 3);
+  EXPECT_EQ(g.chartOfTexel(static_cast<size_t>(g.texelIndex(4, 2))), 1);
+  EXPECT_EQ(g.chartOfTexel(static_cast<size_t>(g.texelIndex(0, 2))), 3);  // one covered cell
   // Charts 3 and 1 meet along x = 2; texel (4, 2) meets chart 2 only inside the shared cell.
   const std::vector<int32_t> expected = {g.texelIndex(2, 0), g.texelIndex(2, 1), g.texelIndex(2, 2),
                                          g.texelIndex(4, 2)};

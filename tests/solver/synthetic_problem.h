@@ -167,7 +167,7 @@ inline SyntheticProblem multiChartProblem(int s) {
       const int t = p.grid.texelOfUnknown[static_cast<size_t>(u)];
       const int x = t % p.grid.nx, y = t / p.grid.nx;
       if (p.grid.texelClass[static_cast<size_t>(t)] == TexelClass::Boundary &&
-          keep(p.grid.texelChart[static_cast<size_t>(t)], x, y))
+          keep(p.grid.chartOfUnknown[static_cast<size_t>(u)], x, y))
         list.push_back({key(x, y), u});
     }
     std::sort(list.begin(), list.end());

@@ -17,7 +17,7 @@ TEST(GridHierarchy, LevelZeroIsTheTexelGrid) {
   ASSERT_EQ(l0.unknownCount(), p.grid.unknownCount());
   for (int u = 0; u < l0.unknownCount(); ++u) {
     const size_t t = static_cast<size_t>(p.grid.texelOfUnknown[static_cast<size_t>(u)]);
-    EXPECT_EQ(l0.chartOf(u), p.grid.texelChart[t]);
+    EXPECT_EQ(l0.chartOf(u), p.grid.chartOfUnknown[static_cast<size_t>(u)]);
     const LatticePoint at = l0.point(u);
     EXPECT_EQ(at.x, static_cast<int>(t) % p.grid.nx);
     EXPECT_EQ(at.y, static_cast<int>(t) / p.grid.nx);

@@ -39,11 +39,12 @@ class TexelDomain {
   std::unique_ptr<TexelOperators> releaseOperators();
   /// False once releaseOperators() has handed the operators over.
   bool hasOperators() const { return operators_ != nullptr; }
-  /// What releaseImageMaps keeps: none of the maps, or the per-texel class and chart, which
+  /// What releaseImageMaps keeps: none of the maps, or the per-texel class and chart (with the
+  /// unknown numbering, 0.19 bytes per texel, that chartOfTexel reads), which
   /// GridHierarchy::build reads (so that a solver can still be made).
   enum class KeptMaps { None, ClassAndChart };
-  /// Frees the grid's per-texel and per-cell maps (texelClass, texelChart, unknownOfTexel,
-  /// multiChartTexels, cellCoverage, overlapCells: about 10 bytes per image texel)
+  /// Frees the grid's per-texel and per-cell maps (texelClass, chartOfUnknown, unknownOfTexel,
+  /// multiChartTexels, cellCoverage, overlapCells: about 2 bytes per image texel and 4 per unknown)
   /// but those `kept`, keeping its size, placement and texelOfUnknown, for a one-shot caller
   /// once nothing reads them: filterTexture's consuming overload frees all but the class and
   /// chart before its solver builds its hierarchy, and those after. Throws InvalidInputError

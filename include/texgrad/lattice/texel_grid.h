@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "texgrad/core/page_allocator.h"
+#include "texgrad/lattice/texel_unknowns.h"
 
 namespace texgrad {
 
@@ -55,13 +56,14 @@ struct TexelGrid {
 
   /// Per grid texel (y * nx + x): class.
   std::vector<TexelClass> texelClass;
-  /// Per grid texel: owning chart, -1 if inactive; for a texel whose footprint meets several
-  /// charts, the chart with the smallest index (listed in multiChartTexels).
-  std::vector<int32_t> texelChart;
   /// Per grid texel: unknown index (active texels numbered in row-major grid order) or -1.
-  std::vector<int32_t> unknownOfTexel;
+  TexelUnknowns unknownOfTexel;
   /// Per unknown: grid texel index (y * nx + x).
   std::vector<int32_t> texelOfUnknown;
+  /// Per unknown: owning chart; for a texel whose footprint meets several charts, the chart
+  /// with the smallest index (listed in multiChartTexels). Per unknown, not per grid texel: half
+  /// the bytes at 50% coverage (docs/memory.md).
+  std::vector<int32_t> chartOfUnknown;
   /// Grid texels whose footprint meets two or more charts (the paper assumes none).
   std::vector<int32_t> multiChartTexels;
 
@@ -80,6 +82,11 @@ struct TexelGrid {
   size_t cellCount() const { return static_cast<size_t>(nx + 1) * static_cast<size_t>(ny + 1); }
   /// Linear index of grid texel (x, y).
   int texelIndex(int x, int y) const { return y * nx + x; }
+  /// Owning chart of grid texel t (chartOfUnknown), -1 if it is inactive.
+  int32_t chartOfTexel(size_t t) const {
+    const int32_t u = unknownOfTexel[t];
+    return u < 0 ? -1 : chartOfUnknown[static_cast<size_t>(u)];
+  }
   /// Linear index of grid cell (a, b), a in [-1, nx - 1], b in [-1, ny - 1].
   int cellIndex(int a, int b) const { return (b + 1) * (nx + 1) + (a + 1); }
   /// Converts a UV point to continuous grid coordinates (texel centres at integers); coordinates
