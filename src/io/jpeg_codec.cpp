@@ -8,6 +8,8 @@
 
 // jpeglib.h needs FILE and size_t declared first.
 #include <jpeglib.h>
+// After jpeglib.h: the message codes (JERR_*).
+#include <jerror.h>
 
 #include "image_codecs.h"
 #include "texgrad/core/error.h"
@@ -15,17 +17,32 @@
 namespace texgrad::codec {
 namespace {
 
-/// libjpeg's error manager with the jump point and the first message (a fixed buffer).
+/// libjpeg's error manager with the jump point and the first message (a fixed buffer, with its
+/// code and first number).
 struct JpegErrors {
   jpeg_error_mgr manager{};
   std::jmp_buf jump{};
   std::array<char, JMSG_LENGTH_MAX> first{};
+  int firstCode = 0;
+  int firstNumber = 0;
   bool warned = false;
 };
 
 void keepMessage(j_common_ptr info) {
   auto* errors = reinterpret_cast<JpegErrors*>(info->err);
-  if (errors->first[0] == '\0') info->err->format_message(info, errors->first.data());
+  if (errors->first[0] != '\0') return;
+  info->err->format_message(info, errors->first.data());
+  errors->firstCode = info->err->msg_code;
+  errors->firstNumber = info->err->msg_parm.i[0];
+}
+
+/// Throws UnsupportedError if a header could not be read because the file's samples are not 8
+/// bits (12-bit JPEGs, which this libjpeg build does not decode).
+void refuseOtherPrecisions(const std::string& name, const JpegErrors& errors) {
+  if (errors.firstCode == JERR_BAD_PRECISION)
+    throw UnsupportedError(name + " is a " + std::to_string(errors.firstNumber) +
+                           "-bit JPEG; texgrad reads 8-bit JPEGs: convert it to a 16-bit PNG or "
+                           "TIFF first (e.g. oiiotool " + name + " -d uint16 -o OUT.png)");
 }
 
 [[noreturn]] void onJpegError(j_common_ptr info) {
@@ -151,8 +168,10 @@ bool writeScanlines(JpegWriter* writer, const Image& image, std::FILE* file, uns
 
 Image decodeJpeg(Bytes bytes, const std::string& name) {
   JpegReader reader;
-  if (!readHeader(&reader, bytes, nullptr) || reader.errors.warned)
+  if (!readHeader(&reader, bytes, nullptr) || reader.errors.warned) {
+    refuseOtherPrecisions(name, reader.errors);
     throw InvalidInputError(corrupt(name, reader.errors));
+  }
   const jpeg_decompress_struct& info = reader.info;
   if (isCmyk(info))
     throw UnsupportedError(name + " is a CMYK JPEG; convert it to RGB first (e.g. oiiotool " +
@@ -175,9 +194,11 @@ Size jpegSize(const std::filesystem::path& path) {
                                                            std::fclose);
   if (!in) throw IoError("cannot open " + path.string() + ": permission denied or unreadable");
   JpegReader reader;
-  if (!readHeader(&reader, {}, in.get()))
+  if (!readHeader(&reader, {}, in.get())) {
+    refuseOtherPrecisions(path.string(), reader.errors);
     throw InvalidInputError("cannot read the header of " + path.string() + ": " +
                             oneLine(reader.errors.first.data()));
+  }
   return {static_cast<int>(reader.info.image_width), static_cast<int>(reader.info.image_height)};
 }
 

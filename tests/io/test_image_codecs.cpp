@@ -337,6 +337,20 @@ TEST(ImageCodecs, ProgressiveJpegDeclaringAHugeImageIsRefusedBeforeDecoding) {
   expectRefusal<UnsupportedError>([&] { readImage(path); }, "40000 x 40000");
 }
 
+TEST(ImageCodecs, TwelveBitJpegIsUnsupportedWithAWayOut) {
+  const auto dir = tempDir("codec_jpeg_12bit");
+  const auto path = dir / "twelve.jpg";
+  writeJpegWithLibjpeg(path, JCS_RGB, false);
+  // The baseline frame header (SOF0): marker, length, then the sample precision, made 12.
+  std::string bytes = readBytes(path);
+  const size_t sof = bytes.find("\xff\xc0");
+  ASSERT_NE(sof, std::string::npos);
+  bytes[sof + 4] = 12;
+  writeBytes(path, bytes);
+  expectRefusal<UnsupportedError>([&] { readImage(path); }, "12-bit JPEG");
+  expectRefusal<UnsupportedError>([&] { readImageSize(path); }, "12-bit JPEG");
+}
+
 TEST(ImageCodecs, TiffDeclaringHugeTilesIsRefused) {
   const auto dir = tempDir("codec_tiff_tiles");
   const auto path = dir / "tiles.tif";
