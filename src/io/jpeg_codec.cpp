@@ -5,6 +5,7 @@
 #include <csetjmp>
 #include <cstdio>
 #include <memory>
+#include <new>
 
 // jpeglib.h needs FILE and size_t declared first.
 #include <jpeglib.h>
@@ -65,6 +66,16 @@ void installErrors(JpegErrors& errors) {
   errors.manager.output_message = [](j_common_ptr) {};
 }
 
+/// jpeg_create_decompress or jpeg_create_compress on `info` under the jump point of `errors`;
+/// false if it failed, which it does only when its memory manager gets no memory (a version
+/// mismatch, its other failure, the build rules out).
+template <typename Info, typename Create>
+bool created(Info* info, JpegErrors* errors, Create create) {
+  if (setjmp(errors->jump)) return false;
+  create(info);
+  return true;
+}
+
 /// libjpeg's decompressor for the lifetime of one decode.
 struct JpegReader {
   jpeg_decompress_struct info{};
@@ -73,7 +84,8 @@ struct JpegReader {
   JpegReader() {
     installErrors(errors);
     info.err = &errors.manager;
-    jpeg_create_decompress(&info);  // only fails on a version mismatch, which the build rules out
+    if (!created(&info, &errors, [](jpeg_decompress_struct* i) { jpeg_create_decompress(i); }))
+      throw std::bad_alloc();
   }
   ~JpegReader() { jpeg_destroy_decompress(&info); }
   JpegReader(const JpegReader&) = delete;
@@ -133,7 +145,8 @@ struct JpegWriter {
   JpegWriter() {
     installErrors(errors);
     info.err = &errors.manager;
-    jpeg_create_compress(&info);
+    if (!created(&info, &errors, [](jpeg_compress_struct* i) { jpeg_create_compress(i); }))
+      throw std::bad_alloc();
   }
   ~JpegWriter() { jpeg_destroy_compress(&info); }
   JpegWriter(const JpegWriter&) = delete;
