@@ -54,6 +54,9 @@ void classifyTexels(TexelGrid& g, const PageVector<uint8_t>& severalChartsInCell
       g.texelOfUnknown.push_back(t);
       g.chartOfUnknown.push_back(chart);
     }
+  // Grown by push_back, up to twice their size: trimmed, as they live through the whole job.
+  g.texelOfUnknown.shrink_to_fit();
+  g.chartOfUnknown.shrink_to_fit();
   g.unknownOfTexel = TexelUnknowns(texels, g.texelOfUnknown);
 }
 

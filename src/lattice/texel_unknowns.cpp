@@ -1,6 +1,7 @@
 // TexelUnknowns: the active texels' bitmask and the running count per 64-texel word.
 #include "texgrad/lattice/texel_unknowns.h"
 
+#include <bit>
 #include <limits>
 #include <string>
 

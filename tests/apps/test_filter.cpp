@@ -418,7 +418,8 @@ TEST(Filter, OperatorsHandedOverOnceAndOnlyTheDomainsAreAccepted) {
 }
 
 TEST(Filter, DomainGridHasNoCellChartsAndMapsKeptForTheHierarchySuffice) {
-  // The consuming filter builds its solver's hierarchy after freeing all maps but these two.
+  // The consuming filter builds its solver's hierarchy after freeing all maps but the class,
+  // the charts and the numbering.
   TexelDomain domain(procedural::cube(3), 96, 64);
   const TexelGrid full = domain.grid();
   // The domain's grid is the atlas's, but for the cells' charts, freed at once.

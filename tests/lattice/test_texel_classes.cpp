@@ -124,6 +124,8 @@ TEST(TexelClasses, ReclassifyingAGridReplacesItsLists) {
   const TexelGrid once = l.classify();
   const TexelGrid twice = l.classify();
   EXPECT_EQ(twice.texelOfUnknown, once.texelOfUnknown);
+  EXPECT_EQ(twice.chartOfUnknown, once.chartOfUnknown);
+  EXPECT_EQ(twice.unknownOfTexel, once.unknownOfTexel);
   EXPECT_EQ(twice.overlapCells, once.overlapCells);
   EXPECT_EQ(twice.multiChartTexels, once.multiChartTexels);
   EXPECT_EQ(once.overlapCells.size(), 1u);

@@ -48,6 +48,16 @@ TEST(TexelUnknowns, EqualsTheNumberingCountedTexelByTexel) {
 TEST(TexelUnknowns, LastTexelOfAWordAndFirstOfTheNext) {
   expectCountedNumbering(192, {0, 63, 64, 127, 128, 191});
   expectCountedNumbering(130, {63, 64, 129});
+  expectCountedNumbering(0, {});
+}
+
+TEST(TexelUnknowns, EqualOnlyForTheSameTexelsAndActiveSet) {
+  const TexelUnknowns numbering(65, std::vector<int32_t>{1, 64});
+  EXPECT_FALSE(numbering.empty());
+  EXPECT_EQ(numbering, TexelUnknowns(65, std::vector<int32_t>{1, 64}));
+  EXPECT_NE(numbering, TexelUnknowns(65, std::vector<int32_t>{1, 63}));
+  EXPECT_NE(TexelUnknowns(64, std::vector<int32_t>{1}), TexelUnknowns(65, std::vector<int32_t>{1}));
+  EXPECT_NE(numbering, TexelUnknowns());
 }
 
 TEST(TexelUnknowns, RefusesActiveTexelsOutOfOrderOrRange) {
@@ -59,9 +69,11 @@ TEST(TexelUnknowns, RefusesActiveTexelsOutOfOrderOrRange) {
 
 TEST(TexelUnknowns, HoldsABitAndAFraction) {
   // A 4096² texture: a bit per texel and a 4-byte count per 64 (0.1875 bytes per texel), against
-  // the 4 bytes of an int per texel.
+  // the 4 bytes of an int per texel, whichever texels are active (every other one here).
   const size_t texels = size_t{4096} * 4096;
-  const TexelUnknowns numbering(texels, randomActive(texels, 0.5, 7));
+  std::vector<int32_t> active;
+  for (size_t t = 0; t < texels; t += 2) active.push_back(static_cast<int32_t>(t));
+  const TexelUnknowns numbering(texels, active);
   EXPECT_LE(numbering.storageBytes(), static_cast<int64_t>(texels * 3 / 16 + 16));
 }
 

@@ -82,9 +82,9 @@ FilterResult filterTexture(const TexelDomain& domain, Image texture, const Filte
 /// (TexelOperators::screenedSystem's visitor), so operators built with
 /// OperatorOptions::deferAssembly are welcome: assembled only then, they never hold S whole. If
 /// the domain no longer holds operators, the grid's per-texel maps go too
-/// (TexelDomain::releaseImageMaps: ~20 bytes per active texel at half coverage), all but the
-/// texels' class and chart before the solver's hierarchy is built, those once it exists. Same
-/// result, bit for bit.
+/// (TexelDomain::releaseImageMaps: ~8 bytes per active texel at half coverage), all but those
+/// the solver's hierarchy reads (texels' class and chart) before it is built, those once it
+/// exists. Same result, bit for bit.
 FilterResult filterTexture(TexelDomain& domain, std::unique_ptr<TexelOperators> operators,
                            Image texture, const FilterOptions& options,
                            const ProgressCallback& progress = {});

@@ -39,9 +39,9 @@ class TexelDomain {
   std::unique_ptr<TexelOperators> releaseOperators();
   /// False once releaseOperators() has handed the operators over.
   bool hasOperators() const { return operators_ != nullptr; }
-  /// What releaseImageMaps keeps: none of the maps, or the per-texel class and chart (with the
-  /// unknown numbering, 0.19 bytes per texel, that chartOfTexel reads), which
-  /// GridHierarchy::build reads (so that a solver can still be made).
+  /// What releaseImageMaps keeps: none of the maps, or those GridHierarchy::build reads (texelClass,
+  /// chartOfUnknown) so that a solver can still be made, with the unknown numbering (0.19 bytes
+  /// per texel) so that chartOfTexel still works.
   enum class KeptMaps { None, ClassAndChart };
   /// Frees the grid's per-texel and per-cell maps (texelClass, chartOfUnknown, unknownOfTexel,
   /// multiChartTexels, cellCoverage, overlapCells: about 2 bytes per image texel and 4 per unknown)

@@ -2,7 +2,6 @@
 // rank over their bitmask instead of an int per texel.
 #pragma once
 
-#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -29,7 +28,7 @@ class TexelUnknowns {
     if (((word >> bit) & 1U) == 0) return -1;
     // The active texels before t: those before its word, and those below it in the word.
     const uint64_t below = word & ((uint64_t{1} << bit) - 1U);
-    return before_[t / 64] + std::popcount(below);
+    return before_[t / 64] + bitsSet(below);
   }
   /// Number of texels.
   size_t size() const { return size_; }
@@ -44,6 +43,16 @@ class TexelUnknowns {
   bool operator==(const TexelUnknowns&) const = default;
 
  private:
+  /// Number of bits set in `word`, in a dozen inline operations: std::popcount is a call into
+  /// libgcc where the build does not assume the popcnt instruction (x86-64 before v2), and this
+  /// runs for every texel lookup of the operators' assembly.
+  static int32_t bitsSet(uint64_t word) {
+    word -= (word >> 1) & 0x5555555555555555U;
+    word = (word & 0x3333333333333333U) + ((word >> 2) & 0x3333333333333333U);
+    word = (word + (word >> 4)) & 0x0f0f0f0f0f0f0f0fU;
+    return static_cast<int32_t>((word * 0x0101010101010101U) >> 56);
+  }
+
   size_t size_ = 0;
   std::vector<uint64_t> bits_;    ///< bit t % 64 of word t / 64: texel t is active
   std::vector<int32_t> before_;  ///< per word: active texels in the words before it
