@@ -321,32 +321,35 @@ void writeBytes(const std::filesystem::path& path, const std::string& bytes) {
   std::ofstream(path, std::ios::binary) << bytes;
 }
 
-TEST(ImageCodecs, ProgressiveJpegDeclaringAHugeImageIsRefusedBeforeDecoding) {
-  const auto dir = tempDir("codec_jpeg_huge");
-  const auto path = dir / "huge.jpg";
-  writeJpegWithLibjpeg(path, JCS_RGB, true);
-  // The progressive frame header (SOF2): marker, length, precision, height, width.
+/// Writes an 8 x 8 RGB JPEG to `path` (progressive if asked), then `edit(bytes, at)` on its bytes
+/// with `at` the offset of its frame header's marker (SOF2 or SOF0: marker, length, precision,
+/// height, width), and writes those back.
+template <typename Edit>
+void writeJpegWithEditedFrameHeader(const std::filesystem::path& path, bool progressive,
+                                    Edit edit) {
+  writeJpegWithLibjpeg(path, JCS_RGB, progressive);
   std::string bytes = readBytes(path);
-  const size_t sof = bytes.find("\xff\xc2");
+  const size_t sof = bytes.find(progressive ? "\xff\xc2" : "\xff\xc0");
   ASSERT_NE(sof, std::string::npos);
-  for (size_t at : {sof + 5, sof + 7}) {  // 40000 x 40000: 1.6 billion texels
-    bytes[at] = static_cast<char>(0x9c);
-    bytes[at + 1] = static_cast<char>(0x40);
-  }
+  edit(bytes, sof);
   writeBytes(path, bytes);
+}
+
+TEST(ImageCodecs, ProgressiveJpegDeclaringAHugeImageIsRefusedBeforeDecoding) {
+  const auto path = tempDir("codec_jpeg_huge") / "huge.jpg";
+  writeJpegWithEditedFrameHeader(path, true, [](std::string& bytes, size_t sof) {
+    for (size_t at : {sof + 5, sof + 7}) {  // 40000 x 40000: 1.6 billion texels
+      bytes[at] = static_cast<char>(0x9c);
+      bytes[at + 1] = static_cast<char>(0x40);
+    }
+  });
   expectRefusal<UnsupportedError>([&] { readImage(path); }, "40000 x 40000");
 }
 
 TEST(ImageCodecs, TwelveBitJpegIsUnsupportedWithAWayOut) {
-  const auto dir = tempDir("codec_jpeg_12bit");
-  const auto path = dir / "twelve.jpg";
-  writeJpegWithLibjpeg(path, JCS_RGB, false);
-  // The baseline frame header (SOF0): marker, length, then the sample precision, made 12.
-  std::string bytes = readBytes(path);
-  const size_t sof = bytes.find("\xff\xc0");
-  ASSERT_NE(sof, std::string::npos);
-  bytes[sof + 4] = 12;
-  writeBytes(path, bytes);
+  const auto path = tempDir("codec_jpeg_12bit") / "twelve.jpg";
+  writeJpegWithEditedFrameHeader(path, false,
+                                 [](std::string& bytes, size_t sof) { bytes[sof + 4] = 12; });
   expectRefusal<UnsupportedError>([&] { readImage(path); }, "12-bit JPEG");
   expectRefusal<UnsupportedError>([&] { readImageSize(path); }, "12-bit JPEG");
 }
