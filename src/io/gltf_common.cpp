@@ -5,10 +5,12 @@
 #include <cctype>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
 #include <string_view>
+#include <system_error>
 
 #include "texgrad/core/error.h"
 #include "texgrad/core/json_depth.h"
@@ -109,6 +111,31 @@ std::vector<unsigned char> readBytes(const std::filesystem::path& path) {
   return bytes;
 }
 
+/// tinygltf's test for an external buffer or image file, true for regular files only. Its own
+/// accepts anything fopen opens, a folder included (a URI of "." or one that decodes to a NUL
+/// byte names the glTF's folder), and its reader then takes a folder's end offset, 2^63 - 1, for
+/// the file's size and allocates that (found by fuzzing). A folder is thus a missing file.
+bool isRegularFile(const std::string& path, void* /*user*/) {
+  std::error_code error;
+  return std::filesystem::is_regular_file(path, error);
+}
+
+/// tinygltf's reader of an external buffer or image file, for regular files only (isRegularFile).
+bool readRegularFile(std::vector<unsigned char>* out, std::string* error, const std::string& path,
+                     void* user) {
+  if (!isRegularFile(path, user)) {
+    *error += "not a regular file";
+    return false;
+  }
+  try {
+    *out = readBytes(path);
+  } catch (const IoError&) {
+    *error += "cannot be read";
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 tinygltf::Model loadModel(const std::filesystem::path& path, tinygltf::LoadImageDataFunction capture,
@@ -125,6 +152,8 @@ tinygltf::Model loadModel(const std::filesystem::path& path, tinygltf::LoadImage
   tinygltf::Model model;
   CaptureContext context{capture, &images, &model};
   loader.SetImageLoader(checkedCapture, &context);
+  loader.SetFsCallbacks(tinygltf::FsCallbacks{isRegularFile, tinygltf::ExpandFilePath,
+                                              readRegularFile, tinygltf::WriteWholeFile, nullptr});
   std::string error, warning;
   const std::string folder = path.parent_path().string();  // external buffers and images
   const auto size = static_cast<unsigned int>(bytes.size());

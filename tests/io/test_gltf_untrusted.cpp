@@ -1,5 +1,6 @@
 // Hostile glTF/GLB files found by fuzzing (issue 27): JSON nested very deeply (tinygltf's parse
-// recursed until the stack overflowed) and image bufferViews past their buffer (read past it).
+// recursed until the stack overflowed), image bufferViews past their buffer (read past it), and
+// buffer or image URIs naming a folder (tinygltf allocated 2^63 - 1 bytes for it).
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -102,6 +103,47 @@ TEST(GltfUntrusted, ImageBufferViewPastItsBufferIsRefused) {
               std::string::npos)
         << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+}
+
+/// A one-triangle glTF with its buffer embedded and one base-colour image at `imageUri`, or its
+/// buffer at `bufferUri` if that is given.
+std::string triangleWithUris(const std::string& imageUri, const std::string& bufferUri = "") {
+  const std::string embedded =
+      "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD9AAAAAAAAAAA"
+      "AAgD8AAIA/AACAPwAAAAAAAAAAAAABAAIAAAA=";
+  return R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+    "meshes":[{"primitives":[{"attributes":{"POSITION":0,"TEXCOORD_0":1},"indices":2,
+      "material":0}]}],
+    "materials":[{"pbrMetallicRoughness":{"baseColorTexture":{"index":0}}}],
+    "textures":[{"source":0}],"images":[{"uri":")" + imageUri + R"("}],
+    "buffers":[{"byteLength":68,"uri":")" + (bufferUri.empty() ? embedded : bufferUri) + R"("}],
+    "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36},
+      {"buffer":0,"byteOffset":36,"byteLength":24},{"buffer":0,"byteOffset":60,"byteLength":6}],
+    "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3",
+      "min":[0,0,0],"max":[1,1,0]},{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"},
+      {"bufferView":2,"componentType":5123,"count":3,"type":"SCALAR"}]})";
+}
+
+TEST(GltfUntrusted, ImageUriNamingTheFolderIsAMissingImage) {
+  // "." (or a URI that decodes to a NUL byte) names the asset's folder, which tinygltf's own file
+  // reader took for a file of 2^63 - 1 bytes and allocated (found by fuzzing): now the image is
+  // missing, as a file that is not there would be, and the mesh is read.
+  for (const char* uri : {".", "%00"}) {
+    const TexturedMesh mesh = readMesh(writeAsset("folder_image.gltf", triangleWithUris(uri)));
+    EXPECT_EQ(mesh.triangles.size(), 1u) << uri;
+  }
+}
+
+TEST(GltfUntrusted, BufferUriNamingTheFolderIsAMissingFile) {
+  const fs::path path = writeAsset("folder_buffer.gltf", triangleWithUris("", "."));
+  try {
+    readMesh(path);
+    ADD_FAILURE() << "read";
+  } catch (const IoError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("File not found"), std::string::npos) << message;
+    EXPECT_NE(message.find(path.string()), std::string::npos) << message;
   }
 }
 
