@@ -4,6 +4,7 @@
 #include "texgrad/apps/filter.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 #include <span>
@@ -51,10 +52,16 @@ class TexelValues {
   }
   int channels() const { return image_.channels; }
   /// gatherTexels(grid, image)(u, c): the nearest image texel for active texels outside it.
-  float operator()(int u, int c) const {
+  float operator()(int u, int c) const { return at(pixelOf(u), c); }
+  /// Where unknown u's values start in the image's (or levels') interleaved values.
+  size_t pixelOf(int u) const {
     const auto [i, j] = imageTexelOf(grid_, u);
-    const size_t k = image_.index(i, j, c);
-    return levels_ ? byteLevelValues()[(*levels_)[k]] : image_.pixels[k];
+    return image_.index(i, j);
+  }
+  /// Channel c of the values starting at `pixel` (pixelOf).
+  float at(size_t pixel, int c) const {
+    const size_t k = pixel + static_cast<size_t>(c);
+    return levels_ ? levelValues_[(*levels_)[k]] : image_.pixels[k];
   }
   /// Channel c at every unknown: floats, as the values are (half the bytes of doubles).
   Eigen::VectorXf channel(int c) const {
@@ -75,6 +82,7 @@ class TexelValues {
   const TexelGrid& grid_;
   const Image& image_;
   const std::vector<uint8_t>* levels_;
+  const std::array<float, kByteLevels>& levelValues_ = byteLevelValues();
 };
 
 /// The filter's right-hand side as it is solved for: rounded to float. Both filters solve with
@@ -141,16 +149,24 @@ void screenColumnByColumn(std::unique_ptr<TexelOperators> operators, std::vector
   std::vector<std::vector<int32_t>> neighbours(barely.size());
   const ColumnVisitor visit = [&](const OperatorColumn& column) {
     const int u = column.column;
-    for (int c = 0; c < channels; ++c) {
-      double mass = 0.0, stiffness = 0.0;
+    // Up to four channels per pass over the column's rows, each row's texel looked up once; per
+    // channel the sums run in row order as one channel's would.
+    for (int c0 = 0; c0 < channels; c0 += 4) {
+      const int group = std::min(4, channels - c0);
+      std::array<double, 4> mass{}, stiffness{};
       for (size_t k = 0; k < column.rows.size(); ++k) {
-        const auto x = static_cast<double>(x0(column.rows[k], c));
-        mass += column.mass[k] * x;
-        if (options.beta != 0.0) stiffness += column.stiffness[k] * x;
+        const size_t pixel = x0.pixelOf(column.rows[k]);
+        for (int c = 0; c < group; ++c) {
+          const auto x = static_cast<double>(x0.at(pixel, c0 + c));
+          mass[c] += column.mass[k] * x;
+          if (options.beta != 0.0) stiffness[c] += column.stiffness[k] * x;
+        }
       }
-      out.rhs[static_cast<size_t>(c)](u, 0) =
-          options.beta == 0.0 ? static_cast<float>(options.alpha * mass)
-                              : static_cast<float>(options.alpha * mass + options.beta * stiffness);
+      for (int c = 0; c < group; ++c)
+        out.rhs[static_cast<size_t>(c0 + c)](u, 0) =
+            options.beta == 0.0
+                ? static_cast<float>(options.alpha * mass[c])
+                : static_cast<float>(options.alpha * mass[c] + options.beta * stiffness[c]);
     }
     const auto at = std::lower_bound(barely.begin(), barely.end(), u);
     if (at == barely.end() || *at != u) return;

@@ -82,10 +82,9 @@ TexelOperators::Impl::ColumnValues TexelOperators::Impl::columnValuesOf(
   return out;
 }
 
-double& TexelOperators::Impl::ColumnValues::at(const SparseMatrixd& pattern, int column,
-                                               int64_t p) {
+double* TexelOperators::Impl::ColumnValues::of(int column) {
   const auto i = std::lower_bound(columns.begin(), columns.end(), column) - columns.begin();
-  return values[static_cast<size_t>(start[i] + p - pattern.outerIndexPtr()[column])];
+  return values.data() + start[static_cast<size_t>(i)];
 }
 
 void TexelOperators::Impl::prepareStreamed(std::vector<Eigen::Matrix2d> faceMetric,
@@ -205,8 +204,8 @@ void TexelOperators::Impl::assembleScreened(double alpha, const ColumnVisitor& v
                             continue;
                           }
                           const int length = outer[u + 1] - outer[u];
-                          std::copy(s, s + length, &seamStiffness.at(mass, u, outer[u]));
-                          if (out) std::copy(m, m + length, &seamMass.at(mass, u, outer[u]));
+                          std::copy(s, s + length, seamStiffness.of(u));
+                          if (out) std::copy(m, m + length, seamMass.of(u));
                         }
                       });
     const auto done = static_cast<std::ptrdiff_t>(outer[complete] - outer[first]);

@@ -308,21 +308,28 @@ void TexelOperators::Impl::buildPattern(const std::vector<uint8_t>& cellCovered)
 
 namespace {
 
+/// Where one column's values of a matrix with M's pattern are: position p at values[p - first].
+struct ColumnSlice {
+  double* values;
+  int64_t first;
+};
+
 /// Adds local (k x k) values into the entries (row texels[j], column texels[i]) of a matrix with
-/// the pattern of `m` (column-major CSC): entry(column, position) is where each value goes.
-template <typename Local, typename Entry>
+/// the pattern of `m` (column-major CSC); columnOf(column) is the ColumnSlice they go to.
+template <typename Local, typename ColumnOf>
 void scatter(const SparseMatrixd& m, const int32_t* texels, int k, const Local& local, double scale,
-             const Entry& entry) {
+             const ColumnOf& columnOf) {
   const int* outer = m.outerIndexPtr();
   const int* inner = m.innerIndexPtr();
   for (int i = 0; i < k; ++i) {
     if (texels[i] < 0) continue;
     const int* begin = inner + outer[texels[i]];
     const int* end = inner + outer[texels[i] + 1];
+    const ColumnSlice column = columnOf(texels[i]);
     for (int j = 0; j < k; ++j) {
       if (texels[j] < 0) continue;
       const int* pos = std::lower_bound(begin, end, texels[j]);
-      entry(texels[i], pos - inner) += scale * local(j, i);
+      column.values[pos - inner - column.first] += scale * local(j, i);
     }
   }
 }
@@ -459,12 +466,12 @@ void TexelOperators::Impl::assembleSeams(std::span<const SeamPiece> pieces, cons
                                          ColumnValues* stiffnessColumns,
                                          ColumnValues* massColumns) const {
   const TexelGrid& grid = basis.grid();
-  auto massEntry = [&](int column, std::ptrdiff_t p) -> double& {
-    return massColumns ? massColumns->at(mass, column, p) : massOut[p];
+  auto sliceOf = [&](ColumnValues* columns, double* whole, int column) {
+    return columns ? ColumnSlice{columns->of(column), mass.outerIndexPtr()[column]}
+                   : ColumnSlice{whole, 0};
   };
-  auto stiffnessEntry = [&](int column, std::ptrdiff_t p) -> double& {
-    return stiffnessColumns ? stiffnessColumns->at(mass, column, p) : stiffnessOut[p];
-  };
+  auto massEntry = [&](int column) { return sliceOf(massColumns, massOut, column); };
+  auto stiffnessEntry = [&](int column) { return sliceOf(stiffnessColumns, stiffnessOut, column); };
   std::vector<double> combined;
   for (const SeamPiece& sp : pieces) {
     const int k = sp.texelEnd - sp.texelBegin;

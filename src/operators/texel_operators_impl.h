@@ -149,8 +149,8 @@ struct TexelOperators::Impl {
     std::vector<int32_t> columns;  ///< ascending
     std::vector<int64_t> start;    ///< offset of each column's values, and the total
     std::vector<double> values;
-    /// The value at position p of M's pattern (p in column `column`, one of `columns`).
-    double& at(const SparseMatrixd& pattern, int column, int64_t p);
+    /// The values of `column` (one of `columns`), in the order of M's pattern.
+    double* of(int column);
   };
   /// Fills the plan's windows of bands for the bands first[f] to last[f] of each face f (none
   /// if last[f] < 0): their bands, and their faces, ascending (a face is in every window its

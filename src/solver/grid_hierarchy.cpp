@@ -37,6 +37,13 @@ void layoutBoxes(GridLevel& level, const std::vector<std::array<int, 4>>& bounds
                             " slots, more than 2^31 - 1");
   level.slotCount = offset;
   level.unknownOfSlot.assign(static_cast<size_t>(offset), -1);
+  // The box of every page's first slot: boxes follow one another in slot order.
+  level.boxOfSlotPage.assign(static_cast<size_t>((offset >> GridLevel::kSlotPageBits) + 1), 0);
+  for (size_t k = 0, b = 0; k < level.boxOfSlotPage.size(); ++k) {
+    const auto first = static_cast<int64_t>(k) << GridLevel::kSlotPageBits;
+    while (b + 1 < level.boxes.size() && level.boxes[b + 1].offset <= first) ++b;
+    level.boxOfSlotPage[k] = static_cast<int32_t>(b);
+  }
 }
 
 std::array<int, 4> emptyBounds() {
@@ -169,14 +176,17 @@ Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridL
 }  // namespace
 
 LatticePoint GridLevel::pointOfSlot(int64_t s) const {
-  // The boxes' slot ranges are consecutive: the box of s is the last one starting at or before s.
-  const auto after =
-      std::upper_bound(boxes.begin(), boxes.end(), s,
-                       [](int64_t slot, const GridBox& b) { return slot < b.offset; });
-  const GridBox& box = *(after - 1);
-  const int64_t local = s - box.offset;
-  return {static_cast<int>(after - 1 - boxes.begin()), box.x0 + static_cast<int>(local % box.width),
-          box.y0 + static_cast<int>(local / box.width)};
+  // The boxes' slot ranges are consecutive: the box of s is the last one starting at or before s,
+  // found from the box of s's page onwards (most pages lie in one box).
+  auto b = static_cast<size_t>(boxOfSlotPage[static_cast<size_t>(s >> kSlotPageBits)]);
+  while (b + 1 < boxes.size() && boxes[b + 1].offset <= s) ++b;
+  const GridBox& box = boxes[b];
+  // In 32 bits (slots < 2^31): a 64-bit division costs several times as much, and the set-up
+  // asks for the point of every lattice neighbour of every unknown.
+  const auto local = static_cast<uint32_t>(s - box.offset);
+  const auto width = static_cast<uint32_t>(box.width);
+  return {static_cast<int>(b), box.x0 + static_cast<int>(local % width),
+          box.y0 + static_cast<int>(local / width)};
 }
 
 GridHierarchy GridHierarchy::build(const TexelGrid& grid, int maxLevels, int minCoarseUnknowns) {
@@ -231,7 +241,8 @@ int64_t GridHierarchy::storageBytes() const {
   int64_t bytes = capacityBytes(levels_);
   for (const GridLevel& g : levels_)
     bytes +=
-        capacityBytes(g.boxes, g.boxOfChart, g.unknownOfSlot, g.slotOfUnknown, g.footprintInterior);
+        capacityBytes(g.boxes, g.boxOfChart, g.boxOfSlotPage, g.unknownOfSlot, g.slotOfUnknown,
+                      g.footprintInterior);
   return bytes;
 }
 

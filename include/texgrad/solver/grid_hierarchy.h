@@ -48,6 +48,10 @@ struct LatticePoint {
 struct GridLevel {
   std::vector<GridBox> boxes;          ///< one box per chart present, in increasing offset
   std::vector<int32_t> boxOfChart;     ///< per chart: index into boxes, -1 if absent
+  /// Slots per page of boxOfSlotPage, as a power of two.
+  static constexpr int kSlotPageBits = 10;
+  /// Per page of 2^kSlotPageBits slots: the box (index into boxes) of its first slot.
+  std::vector<int32_t> boxOfSlotPage;
   int64_t slotCount = 0;               ///< total slots over all boxes (< 2^31)
   /// Per slot: unknown index or -1 (the inverse of slotOfUnknown). Only a set-up reads it: a
   /// MultigridSolver's hierarchy frees it after each set-up (GridHierarchy::releaseUnknownOfSlot).
@@ -57,7 +61,7 @@ struct GridLevel {
   std::vector<uint8_t> footprintInterior;
   /// Number of unknowns at this level.
   int unknownCount() const { return static_cast<int>(slotOfUnknown.size()); }
-  /// Box and lattice position of slot s (a binary search over the boxes).
+  /// Box and lattice position of slot s (from its page's box on: boxOfSlotPage).
   LatticePoint pointOfSlot(int64_t s) const;
   /// Box and lattice position of unknown u.
   LatticePoint point(int u) const { return pointOfSlot(slotOfUnknown[static_cast<size_t>(u)]); }
