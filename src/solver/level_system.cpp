@@ -19,22 +19,26 @@ namespace {
 class Neighbourhood {
  public:
   Neighbourhood(const GridLevel& level, int u)
-      : level_(level), point_(level.point(u)), box_(level.boxes[static_cast<size_t>(point_.box)]) {}
+      : level_(level),
+        slot_(level.slotOfUnknown[static_cast<size_t>(u)]),
+        width_(level.boxes[static_cast<size_t>(level.point(u).box)].width) {}
   /// Stencil index of unknown v, (dy + 1) * 3 + (dx + 1), or -1 when v is not a 3 x 3 lattice
-  /// neighbour in the same chart (a slot outside the box belongs to another chart's box).
+  /// neighbour in the same chart. From the slots' difference dy * width + dx alone: an unknown
+  /// lies inside its box's empty ring, so its 3 x 3 neighbours' slots are in its box, and no
+  /// other slot is that close (another chart's box has other slots).
   int stencilIndex(int v) const {
-    const int64_t local = level_.slotOfUnknown[static_cast<size_t>(v)] - box_.offset;
-    if (local < 0 || local >= static_cast<int64_t>(box_.width) * box_.height) return -1;
-    const int dx = box_.x0 + static_cast<int>(local % box_.width) - point_.x;
-    const int dy = box_.y0 + static_cast<int>(local / box_.width) - point_.y;
-    if (std::abs(dx) > 1 || std::abs(dy) > 1) return -1;
-    return (dy + 1) * 3 + (dx + 1);
+    const int64_t offset = level_.slotOfUnknown[static_cast<size_t>(v)] - slot_;
+    for (int dy = -1; dy <= 1; ++dy) {
+      const int64_t dx = offset - static_cast<int64_t>(dy) * width_;
+      if (dx >= -1 && dx <= 1) return (dy + 1) * 3 + static_cast<int>(dx + 1);
+    }
+    return -1;
   }
 
  private:
   const GridLevel& level_;
-  LatticePoint point_;
-  const GridBox& box_;
+  int64_t slot_;  ///< of the unknown
+  int width_;     ///< of its box
 };
 
 }  // namespace

@@ -89,3 +89,21 @@ TEST(GridHierarchy, UnknownOfSlotFreedIsRebuiltAsBuiltAndProlongationsDoWithoutI
              galerkinProduct(a, built.level(0), built.level(1))).norm(), 0.0);
   EXPECT_EQ(h.storageBytes(), whole);
 }
+
+TEST(GridHierarchy, PointOfEverySlotIsThatSlotOfItsBox) {
+  // Boxes of several widths over many pages of slots (boxOfSlotPage), on every level.
+  const test::SyntheticProblem p = test::multiChartProblem(64);
+  const GridHierarchy h = GridHierarchy::build(p.grid, 4, 16);
+  ASSERT_GE(h.levelCount(), 4);
+  ASSERT_GT(h.level(0).slotCount, int64_t{64} << GridLevel::kSlotPageBits);
+  for (int l = 0; l < h.levelCount(); ++l) {
+    const GridLevel& g = h.level(l);
+    for (int64_t s = 0; s < g.slotCount; ++s) {
+      const LatticePoint at = g.pointOfSlot(s);
+      ASSERT_GE(at.box, 0);
+      const GridBox& box = g.boxes[static_cast<size_t>(at.box)];
+      ASSERT_TRUE(box.contains(at.x, at.y)) << "level " << l << " slot " << s;
+      ASSERT_EQ(box.slot(at.x, at.y), s) << "level " << l;
+    }
+  }
+}

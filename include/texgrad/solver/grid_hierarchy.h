@@ -25,6 +25,9 @@ struct GridBox {
   int x0 = 0, y0 = 0;         ///< level-lattice coordinates of the box's slot (0, 0)
   int width = 0, height = 0;  ///< size in slots, ring included
   int64_t offset = 0;         ///< index of slot (0, 0) in the level's slot arrays
+  /// ceil(2^64 / width) (0 until set): divides by the width with two multiplications
+  /// (GridLevel::pointOfSlot).
+  uint64_t widthReciprocal = 0;
   /// Slot index of level-lattice position (x, y), which must lie in the box.
   int64_t slot(int x, int y) const {
     return offset + static_cast<int64_t>(y - y0) * width + (x - x0);
