@@ -2,8 +2,6 @@
 // CHOLMOD, moving blocks between double (app side) and the cycle precision.
 #include "texgrad/apps/system_solver.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
 #include <chrono>
@@ -16,6 +14,7 @@
 #include <utility>
 
 #include "texgrad/core/error.h"
+#include "texgrad/core/row_sums.h"
 #include "texgrad/solver/cholmod_solver.h"
 #include "texgrad/solver/conjugate_gradient.h"
 
@@ -24,20 +23,6 @@ namespace {
 
 double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-/// Rows per task in the parallel vector kernels below (fixed: results do not depend on threads).
-constexpr Eigen::Index kRowsPerTask = 1 << 14;
-
-/// Deterministic parallel sum of f(begin, end) over row blocks of [0, n).
-template <typename F>
-double sumOverRows(Eigen::Index n, F&& f) {
-  return tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<Eigen::Index>(0, n, kRowsPerTask), 0.0,
-      [&](const tbb::blocked_range<Eigen::Index>& range, double acc) {
-        return acc + f(range.begin(), range.end());
-      },
-      [](double u, double v) { return u + v; });
 }
 
 double residual(const Eigen::SparseMatrix<double>& a, const Eigen::MatrixXd& b,

@@ -1,7 +1,9 @@
 // Solver module: multi-channel preconditioned conjugate gradients with a solve report.
 #include "texgrad/solver/conjugate_gradient.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+
 
 #include <chrono>
 #include <cmath>
@@ -10,6 +12,7 @@
 #include <utility>
 
 #include "texgrad/core/error.h"
+#include "texgrad/core/row_sums.h"
 
 namespace texgrad {
 namespace {
@@ -20,10 +23,52 @@ double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-/// Column-wise dot products of two n x k blocks, accumulated in double whatever their precision.
+/// Column-wise dot products of two n x k blocks, accumulated in double whatever their precision,
+/// on all cores (sumOverRows: the same bits on any number of threads).
 template <typename U, typename V>
 Eigen::RowVectorXd columnDots(const U& u, const V& v) {
-  return u.template cast<double>().cwiseProduct(v.template cast<double>()).colwise().sum();
+  Eigen::RowVectorXd dots(u.cols());
+  for (Eigen::Index c = 0; c < u.cols(); ++c)
+    dots(c) = sumOverRows(u.rows(), [&](int64_t begin, int64_t end) {
+      double acc = 0.0;
+      for (int64_t i = begin; i < end; ++i)
+        acc += static_cast<double>(u(i, c)) * static_cast<double>(v(i, c));
+      return acc;
+    });
+  return dots;
+}
+
+/// u += v step, column c by step(c), on all cores; returns the squared norm over all columns
+/// of v alpha (with `alpha`: the step in double) or, without, of the updated u, in double.
+template <typename U, typename V>
+double addScaled(U& u, const V& v, const Eigen::Matrix<typename U::Scalar, 1, Eigen::Dynamic>& step,
+                 const Eigen::RowVectorXd* alpha = nullptr) {
+  using Iterate = typename U::Scalar;
+  return sumOverRows(u.rows(), [&](int64_t begin, int64_t end) {
+    double acc = 0.0;
+    for (Eigen::Index c = 0; c < u.cols(); ++c)
+      for (int64_t i = begin; i < end; ++i) {
+        u(i, c) += static_cast<Iterate>(v(i, c)) * step(c);
+        const double term = alpha ? static_cast<double>(v(i, c)) * (*alpha)(c)
+                                  : static_cast<double>(u(i, c));
+        acc += term * term;
+      }
+    return acc;
+  });
+}
+
+/// p = w + beta p, column c by beta(c), on all cores.
+template <typename P>
+void newDirection(P& p, const P& w, const Eigen::RowVectorXd& beta) {
+  using Scalar = typename P::Scalar;
+  tbb::parallel_for(tbb::blocked_range<int64_t>(0, p.rows(), kRowsPerTask),
+                    [&](const tbb::blocked_range<int64_t>& rows) {
+                      for (Eigen::Index c = 0; c < p.cols(); ++c) {
+                        const auto b = static_cast<Scalar>(beta(c));
+                        for (int64_t i = rows.begin(); i != rows.end(); ++i)
+                          p(i, c) = w(i, c) + b * p(i, c);
+                      }
+                    });
 }
 
 /// Throws NumericalError naming the first NaN or infinity of `m` ("the right-hand side").
@@ -165,11 +210,11 @@ SolveReport conjugateGradientFrom(const CgOperator<Scalar, Iterate>& a,
       alpha(c) = pap(c) > 0.0 ? rz(c) / pap(c) : 0.0;
     }
     const Eigen::Matrix<Iterate, 1, Eigen::Dynamic> step = alpha.template cast<Iterate>();
-    r.noalias() -= w.template cast<Iterate>() * step.asDiagonal();
-    const double residual = r.norm() * scale;
+    const Eigen::Matrix<Iterate, 1, Eigen::Dynamic> minusStep = -step;
+    const double residual = std::sqrt(addScaled(r, w, minusStep)) * scale;  // r -= A p alpha
     if (residual >= bestResidual && best.size() == 0) best = x.template cast<Scalar>();
-    x.noalias() += p.template cast<Iterate>() * step.asDiagonal();
-    report.rmsChange.push_back((p.template cast<double>() * alpha.asDiagonal()).norm() /
+    const double change = addScaled(x, p, step, &alpha);  // x += p alpha
+    report.rmsChange.push_back(std::sqrt(change) /
                                std::sqrt(std::max<double>(1.0, double(p.size()))));
     report.times.other += secondsSince(start);
     precondition();
@@ -178,9 +223,10 @@ SolveReport conjugateGradientFrom(const CgOperator<Scalar, Iterate>& a,
     for (Eigen::Index c = 0; c < x.cols(); ++c) {
       requirePositive(rzNew(c), !r.col(c).isZero(0.0), "r^T z", "the preconditioner", c,
                       report.iterations);
-      const double beta = rz(c) > 0.0 ? rzNew(c) / rz(c) : 0.0;
-      p.col(c) = w.col(c) + static_cast<Scalar>(beta) * p.col(c);
     }
+    Eigen::RowVectorXd beta(x.cols());
+    for (Eigen::Index c = 0; c < x.cols(); ++c) beta(c) = rz(c) > 0.0 ? rzNew(c) / rz(c) : 0.0;
+    newDirection(p, w, beta);
     rz = rzNew;
     ++report.iterations;
     report.residuals.push_back(residual);
