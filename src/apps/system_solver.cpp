@@ -13,8 +13,8 @@
 #include <type_traits>
 #include <utility>
 
+#include "core/row_sums.h"
 #include "texgrad/core/error.h"
-#include "texgrad/core/row_sums.h"
 #include "texgrad/solver/cholmod_solver.h"
 #include "texgrad/solver/conjugate_gradient.h"
 

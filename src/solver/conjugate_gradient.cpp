@@ -4,15 +4,14 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-
 #include <chrono>
 #include <cmath>
 #include <string>
 #include <type_traits>
 #include <utility>
 
+#include "core/row_sums.h"
 #include "texgrad/core/error.h"
-#include "texgrad/core/row_sums.h"
 
 namespace texgrad {
 namespace {
@@ -49,8 +48,8 @@ double addScaled(U& u, const V& v, const Eigen::Matrix<typename U::Scalar, 1, Ei
     for (Eigen::Index c = 0; c < u.cols(); ++c)
       for (int64_t i = begin; i < end; ++i) {
         u(i, c) += static_cast<Iterate>(v(i, c)) * step(c);
-        const double term = alpha ? static_cast<double>(v(i, c)) * (*alpha)(c)
-                                  : static_cast<double>(u(i, c));
+        const double term =
+            alpha ? static_cast<double>(v(i, c)) * (*alpha)(c) : static_cast<double>(u(i, c));
         acc += term * term;
       }
     return acc;

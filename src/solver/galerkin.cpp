@@ -374,16 +374,16 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
         if (unknownOf(slot) < 0) continue;
         if (system.kind[static_cast<size_t>(slot)] != SlotKind::Interior) return false;
         ++children;
-        const double w = detail::transferWeight<double>(fx, c.x) *
-                         detail::transferWeight<double>(fy, c.y);
+        const double w =
+            detail::transferWeight<double>(fx, c.x) * detail::transferWeight<double>(fy, c.y);
         const size_t i = static_cast<size_t>(first + fy - y0);
         const SlotRow& row = system.boxRows[i];
         const SlotRow& above = system.boxRows[i - 1];
         double off = 0.0;
         for (int k = 0; k < 9; ++k) {
           if (k == 4 || unknownOf(slot + stencilOffset(k, row.width)) < 0) continue;
-          const double value = static_cast<double>(stencils[static_cast<size_t>(
-              couplingAt(above, row, slot, k))]);
+          const double value =
+              static_cast<double>(stencils[static_cast<size_t>(couplingAt(above, row, slot, k))]);
           off += value;
           addFine(fx + k % 3 - 1, fy + k / 3 - 1, value * w);
         }
@@ -405,8 +405,8 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
     }
     for (size_t k = 0; k < 9; ++k) {  // by increasing coarse index, as the general path sorts
       if (!reached[k]) continue;
-      const int v = coarse.unknownOfSlot[static_cast<size_t>(coarseBox.slot(
-          c.x + static_cast<int>(k % 3) - 1, c.y + static_cast<int>(k / 3) - 1))];
+      const int v = coarse.unknownOfSlot[static_cast<size_t>(
+          coarseBox.slot(c.x + static_cast<int>(k % 3) - 1, c.y + static_cast<int>(k / 3) - 1))];
       if (v < 0) {  // a coarse parent is missing: not a column of this shape
         out.clear();
         return false;

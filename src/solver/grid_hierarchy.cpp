@@ -35,7 +35,8 @@ void layoutBoxes(GridLevel& level, const std::vector<std::array<int, 4>>& bounds
     box.width = xmax - xmin + 3;
     box.height = ymax - ymin + 3;
     box.offset = offset;
-    box.widthReciprocal = std::numeric_limits<uint64_t>::max() / static_cast<uint64_t>(box.width) + 1;  // width >= 3
+    box.widthReciprocal =
+        std::numeric_limits<uint64_t>::max() / static_cast<uint64_t>(box.width) + 1;  // width >= 3
     offset += static_cast<int64_t>(box.width) * box.height;
     level.boxOfChart[c] = static_cast<int32_t>(level.boxes.size());
     level.boxes.push_back(box);
@@ -194,7 +195,7 @@ LatticePoint GridLevel::pointOfSlot(int64_t s) const {
   // direct computation", 2019): the set-up asks for the point of every lattice neighbour of
   // every unknown, and a division instruction costs several times the two multiplications.
   const auto local = static_cast<uint32_t>(s - box.offset);  // slots < 2^31
-  const uint64_t fraction = box.widthReciprocal * local;    // modulo 2^64
+  const uint64_t fraction = box.widthReciprocal * local;     // modulo 2^64
   const auto row = static_cast<int>(highBits(box.widthReciprocal, local));
   const auto column = static_cast<int>(highBits(fraction, static_cast<uint64_t>(box.width)));
   return {static_cast<int>(b), box.x0 + column, box.y0 + row};
@@ -251,9 +252,8 @@ void GridHierarchy::restoreUnknownOfSlot() {
 int64_t GridHierarchy::storageBytes() const {
   int64_t bytes = capacityBytes(levels_);
   for (const GridLevel& g : levels_)
-    bytes +=
-        capacityBytes(g.boxes, g.boxOfChart, g.boxOfSlotPage, g.unknownOfSlot, g.slotOfUnknown,
-                      g.footprintInterior);
+    bytes += capacityBytes(g.boxes, g.boxOfChart, g.boxOfSlotPage, g.unknownOfSlot, g.slotOfUnknown,
+                           g.footprintInterior);
   return bytes;
 }
 

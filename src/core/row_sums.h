@@ -1,5 +1,5 @@
-// Core: sums over the rows of long vectors on all cores, in an order fixed by the row count
-// alone, so that a solve gives the same bits on any number of threads.
+// Core (private): sums over the rows of long vectors on all cores, in an order fixed by the row
+// count alone, so that a solve gives the same bits on any number of threads.
 #pragma once
 
 #include <tbb/blocked_range.h>
@@ -35,9 +35,8 @@ std::array<double, K> sumsOverRows(int64_t n, F&& f) {
 /// The sum f(begin, end) returns (a double) over row blocks of [0, n), as sumsOverRows adds.
 template <typename F>
 double sumOverRows(int64_t n, F&& f) {
-  return sumsOverRows<1>(n, [&](int64_t begin, int64_t end) {
-    return std::array<double, 1>{f(begin, end)};
-  })[0];
+  return sumsOverRows<1>(
+      n, [&](int64_t begin, int64_t end) { return std::array<double, 1>{f(begin, end)}; })[0];
 }
 
 }  // namespace texgrad
