@@ -281,6 +281,153 @@ Sparse galerkinProduct(const SparseSum& a, const GridLevel& fine, const GridLeve
 
 namespace detail {
 
+namespace {
+
+/// The interior rows of a level's system as its stencils hold them.
+template <typename T>
+class InteriorRows {
+ public:
+  InteriorRows(const GridLevel& level, const LevelSystem& system, std::span<const T> stencils,
+               std::span<const T> rowSums)
+      : level_(level),
+        system_(system),
+        stencils_(stencils),
+        rowSums_(rowSums),
+        firstRow_(level.boxes.size(), {-1, 0}) {
+    for (size_t k = 0; k < system.boxRows.size(); ++k) {
+      auto& first = firstRow_[static_cast<size_t>(system.boxRows[k].box)];
+      if (first.first < 0) first = {static_cast<int64_t>(k), system.boxRows[k].y};
+    }
+  }
+  /// Calls f(k, value) for the entries of interior slot s (of box `box`, lattice row y) by
+  /// stencil index k = (dy + 1) * 3 + (dx + 1): the couplings to the unknowns around it, then
+  /// (k = 4) the diagonal, its row sum less them.
+  template <typename F>
+  void forEachEntry(int box, int y, int64_t s, F&& f) const {
+    // The row holding slot s and the row above it, which stores s's couplings up.
+    const auto& [first, y0] = firstRow_[static_cast<size_t>(box)];
+    const auto i = static_cast<size_t>(first + y - y0);
+    const SlotRow& row = system_.boxRows[i];
+    const SlotRow& above = system_.boxRows[i - 1];
+    double off = 0.0;
+    for (int k = 0; k < 9; ++k) {
+      // (A has no entry at an empty slot)
+      if (k == 4 || level_.unknownOfSlot[static_cast<size_t>(s + stencilOffset(k, row.width))] < 0)
+        continue;
+      const double value =
+          static_cast<double>(stencils_[static_cast<size_t>(couplingAt(above, row, s, k))]);
+      off += value;
+      f(k, value);
+    }
+    f(4, static_cast<double>(rowSums_[static_cast<size_t>(s)]) - off);
+  }
+  /// True if slot s holds an interior unknown.
+  bool interior(int64_t s) const {
+    return level_.unknownOfSlot[static_cast<size_t>(s)] >= 0 &&
+           system_.kind[static_cast<size_t>(s)] == SlotKind::Interior;
+  }
+
+ private:
+  const GridLevel& level_;
+  const LevelSystem& system_;
+  std::span<const T> stencils_, rowSums_;
+  /// Per box: index in boxRows of its first row and that row's lattice y (a box's rows are
+  /// consecutive from there, LevelSystem::boxRows).
+  std::vector<std::pair<int64_t, int>> firstRow_;
+};
+
+/// Column j of A^1 = Pᵀ A P where every child of coarse texel j has an interior row, formed as
+/// galerkinColumns forms it but with the fine entries in the 5 x 5 window around j's centre
+/// child and the coarse ones in the 3 x 3 window around j, positions known from the lattice: no
+/// accumulator's hashing, no sort, no point lookups. The same sums in the same order (children
+/// by fine index, each row's entries in the order of its rowOf, fine entries in the order first
+/// touched), so the same bits. Other columns are left to galerkinColumns (returns false).
+template <typename T>
+class InteriorColumns {
+ public:
+  InteriorColumns(const GridLevel& fine, const GridLevel& coarse, const InteriorRows<T>& rows)
+      : fine_(fine), coarse_(coarse), rows_(rows) {}
+
+  bool operator()(int j, std::vector<std::pair<int, double>>& out) const {
+    const LatticePoint c = coarse_.point(j);
+    const GridBox& coarseBox = coarse_.boxes[static_cast<size_t>(c.box)];
+    const int fineBox = fine_.boxOfChart[static_cast<size_t>(coarseBox.chart)];
+    Window window(2 * c.x - 2, 2 * c.y - 2);
+    if (!sumFineEntries(c, fineBox, window)) return false;
+    std::array<double, 9> sums{};
+    std::array<bool, 9> reached{};
+    for (int t = 0; t < window.touchedCount; ++t) {  // (Pᵀ A P)_{:, j}
+      const int at = window.touched[static_cast<size_t>(t)];
+      const LatticeParents px = latticeParents(window.x0 + at % 5);
+      const LatticeParents py = latticeParents(window.y0 + at / 5);
+      for (int jy = 0; jy < py.count; ++jy)
+        for (int ix = 0; ix < px.count; ++ix) {
+          const auto x = static_cast<size_t>(ix), y = static_cast<size_t>(jy);
+          const auto k = static_cast<size_t>((py.index[y] - c.y + 1) * 3 + px.index[x] - c.x + 1);
+          reached[k] = true;
+          sums[k] += px.weight[x] * py.weight[y] * window.sum[static_cast<size_t>(at)];
+        }
+    }
+    for (size_t k = 0; k < 9; ++k) {  // by increasing coarse index, as galerkinColumns sorts
+      if (!reached[k]) continue;
+      const int v = coarse_.unknownOfSlot[static_cast<size_t>(
+          coarseBox.slot(c.x + static_cast<int>(k % 3) - 1, c.y + static_cast<int>(k / 3) - 1))];
+      if (v < 0) {  // a parent without an unknown: not a column of this shape
+        out.clear();
+        return false;
+      }
+      out.emplace_back(v, sums[k]);
+    }
+    return true;
+  }
+
+ private:
+  /// Sums at the fine lattice positions (x0 + i, y0 + j), i, j < 5, in the order first touched.
+  struct Window {
+    Window(int x, int y) : x0(x), y0(y) {}
+    void add(int x, int y, double value) {
+      const auto at = static_cast<size_t>((y - y0) * 5 + (x - x0));
+      if (!seen[at]) {
+        seen[at] = true;
+        touched[static_cast<size_t>(touchedCount++)] = static_cast<int8_t>(at);
+      }
+      sum[at] += value;
+    }
+    int x0, y0;
+    std::array<double, 25> sum{};
+    std::array<bool, 25> seen{};
+    std::array<int8_t, 25> touched{};
+    int touchedCount = 0;
+  };
+
+  /// (A P)_{:, j} into `window` for coarse texel c, its children in fine box `fineBox`; false
+  /// if a child's row is not interior or c has no child.
+  bool sumFineEntries(const LatticePoint& c, int fineBox, Window& window) const {
+    const GridBox& box = fine_.boxes[static_cast<size_t>(fineBox)];
+    int children = 0;
+    for (int fy = 2 * c.y - 1; fy <= 2 * c.y + 1; ++fy)  // by increasing fine index
+      for (int fx = 2 * c.x - 1; fx <= 2 * c.x + 1; ++fx) {
+        if (!box.contains(fx, fy)) continue;
+        const int64_t s = box.slot(fx, fy);
+        if (fine_.unknownOfSlot[static_cast<size_t>(s)] < 0) continue;
+        if (!rows_.interior(s)) return false;
+        ++children;
+        const double w =
+            detail::transferWeight<double>(fx, c.x) * detail::transferWeight<double>(fy, c.y);
+        rows_.forEachEntry(fineBox, fy, s, [&](int k, double value) {
+          window.add(fx + k % 3 - 1, fy + k / 3 - 1, value * w);
+        });
+      }
+    return children > 0;
+  }
+
+  const GridLevel& fine_;
+  const GridLevel& coarse_;
+  const InteriorRows<T>& rows_;
+};
+
+}  // namespace
+
 // Why reading all 9 lattice neighbours of an interior row keeps the pattern of Pᵀ A P although A
 // may lack some of them (the walk's symbolic phase forms A^1 from A's pattern, its numeric phase
 // from the stencils, and both must agree): an extra entry (u, v), v a lattice neighbour of u,
@@ -299,123 +446,33 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
   const auto unknownOf = [&](int64_t slot) {
     return fine.unknownOfSlot[static_cast<size_t>(slot)];
   };
-  // Per box: index in boxRows of its first row and that row's lattice y (a box's rows are
-  // consecutive from there, LevelSystem::boxRows).
-  std::vector<std::pair<int64_t, int>> firstRow(fine.boxes.size(), {-1, 0});
-  for (size_t k = 0; k < system.boxRows.size(); ++k) {
-    auto& first = firstRow[static_cast<size_t>(system.boxRows[k].box)];
-    if (first.first < 0) first = {static_cast<int64_t>(k), system.boxRows[k].y};
-  }
+  const InteriorRows<T> rows(fine, system, stencils, rowSums);
   const auto rowOf = [&](int r, const auto& f) {
     const int64_t s = fine.slotOfUnknown[static_cast<size_t>(r)];
     if (system.kind[static_cast<size_t>(s)] == SlotKind::Interior) {
-      // The row holding slot s and the row above it, which stores s's couplings up.
       const LatticePoint p = fine.point(r);
-      const auto& [first, y0] = firstRow[static_cast<size_t>(p.box)];
-      const size_t i = static_cast<size_t>(first + p.y - y0);
-      const SlotRow& row = system.boxRows[i];
-      const SlotRow& above = system.boxRows[i - 1];
-      double off = 0.0;
-      for (int k = 0; k < 9; ++k) {  // stencil index k = (dy + 1) * 3 + (dx + 1)
-        const int v = unknownOf(s + stencilOffset(k, row.width));
-        if (k == 4 || v < 0) continue;  // (A has no entry at an empty slot)
-        const auto at = static_cast<size_t>(couplingAt(above, row, s, k));
-        const double value = static_cast<double>(stencils[at]);
-        off += value;
-        f(v, value);
-      }
-      f(r, static_cast<double>(rowSums[static_cast<size_t>(s)]) - off);
+      const int width = fine.boxes[static_cast<size_t>(p.box)].width;
+      rows.forEachEntry(p.box, p.y, s, [&](int k, double value) {
+        f(k == 4 ? r : unknownOf(s + stencilOffset(k, width)), value);
+      });
       return;
     }
     const auto j = static_cast<size_t>(system.boundaryIndex.rank(r));
-    const SlotCsr& rows = system.boundaryRows;
+    const SlotCsr& boundary = system.boundaryRows;
     const int64_t offEnd = system.offBlockEnd[j];
     double rounding = 0.0;  // of the couplings to interior texels, which their stencils hold in T
-    for (int64_t e = rows.ptr[j]; e != offEnd; ++e) {
-      const double exact = rows.val[static_cast<size_t>(e)];
+    for (int64_t e = boundary.ptr[j]; e != offEnd; ++e) {
+      const double exact = boundary.val[static_cast<size_t>(e)];
       const double value = static_cast<double>(static_cast<T>(exact));
       rounding += exact - value;
-      f(unknownOf(rows.col[static_cast<size_t>(e)]), value);
+      f(unknownOf(boundary.col[static_cast<size_t>(e)]), value);
     }
-    for (int64_t e = offEnd; e != rows.ptr[j + 1]; ++e) {
-      const int v = unknownOf(rows.col[static_cast<size_t>(e)]);
-      f(v, rows.val[static_cast<size_t>(e)] + (v == r ? rounding : 0.0));
+    for (int64_t e = offEnd; e != boundary.ptr[j + 1]; ++e) {
+      const int v = unknownOf(boundary.col[static_cast<size_t>(e)]);
+      f(v, boundary.val[static_cast<size_t>(e)] + (v == r ? rounding : 0.0));
     }
   };
-  // Column j of A^1 where every child of coarse texel j has an interior row, as the general path
-  // forms it but with its fine entries in a 5 x 5 window around j's centre child and its coarse
-  // ones in the 3 x 3 window around j, positions known from the lattice: no accumulator's
-  // hashing, no sort, no point lookups. The same sums in the same order (children by fine index,
-  // each row's entries in rowOf's order, fine entries in the order first touched): the same bits.
-  const auto interiorColumn = [&](int j, std::vector<std::pair<int, double>>& out) {
-    const LatticePoint c = coarse.point(j);
-    const GridBox& coarseBox = coarse.boxes[static_cast<size_t>(c.box)];
-    const int fineBoxIndex = fine.boxOfChart[static_cast<size_t>(coarseBox.chart)];
-    const GridBox& fineBox = fine.boxes[static_cast<size_t>(fineBoxIndex)];
-    const auto& [first, y0] = firstRow[static_cast<size_t>(fineBoxIndex)];
-    const int wx = 2 * c.x - 2, wy = 2 * c.y - 2;  // the fine window's corner
-    std::array<double, 25> fineSum{};
-    std::array<int8_t, 25> touched{};  // window positions in the order first touched
-    std::array<bool, 25> seen{};
-    int touchedCount = 0;
-    const auto addFine = [&](int fx, int fy, double value) {
-      const int at = (fy - wy) * 5 + (fx - wx);
-      if (!seen[static_cast<size_t>(at)]) {
-        seen[static_cast<size_t>(at)] = true;
-        touched[static_cast<size_t>(touchedCount++)] = static_cast<int8_t>(at);
-      }
-      fineSum[static_cast<size_t>(at)] += value;
-    };
-    int children = 0;
-    for (int fy = 2 * c.y - 1; fy <= 2 * c.y + 1; ++fy)  // increasing fine index
-      for (int fx = 2 * c.x - 1; fx <= 2 * c.x + 1; ++fx) {
-        if (!fineBox.contains(fx, fy)) continue;
-        const int64_t slot = fineBox.slot(fx, fy);
-        if (unknownOf(slot) < 0) continue;
-        if (system.kind[static_cast<size_t>(slot)] != SlotKind::Interior) return false;
-        ++children;
-        const double w =
-            detail::transferWeight<double>(fx, c.x) * detail::transferWeight<double>(fy, c.y);
-        const size_t i = static_cast<size_t>(first + fy - y0);
-        const SlotRow& row = system.boxRows[i];
-        const SlotRow& above = system.boxRows[i - 1];
-        double off = 0.0;
-        for (int k = 0; k < 9; ++k) {
-          if (k == 4 || unknownOf(slot + stencilOffset(k, row.width)) < 0) continue;
-          const double value =
-              static_cast<double>(stencils[static_cast<size_t>(couplingAt(above, row, slot, k))]);
-          off += value;
-          addFine(fx + k % 3 - 1, fy + k / 3 - 1, value * w);
-        }
-        addFine(fx, fy, (static_cast<double>(rowSums[static_cast<size_t>(slot)]) - off) * w);
-      }
-    if (children == 0) return false;
-    std::array<double, 9> coarseSum{};
-    std::array<bool, 9> reached{};
-    for (int t = 0; t < touchedCount; ++t) {
-      const int at = touched[static_cast<size_t>(t)];
-      const LatticeParents px = latticeParents(wx + at % 5), py = latticeParents(wy + at / 5);
-      for (int jy = 0; jy < py.count; ++jy)
-        for (int ix = 0; ix < px.count; ++ix) {
-          const size_t x = static_cast<size_t>(ix), y = static_cast<size_t>(jy);
-          const auto k = static_cast<size_t>((py.index[y] - c.y + 1) * 3 + (px.index[x] - c.x + 1));
-          reached[k] = true;
-          coarseSum[k] += px.weight[x] * py.weight[y] * fineSum[static_cast<size_t>(at)];
-        }
-    }
-    for (size_t k = 0; k < 9; ++k) {  // by increasing coarse index, as the general path sorts
-      if (!reached[k]) continue;
-      const int v = coarse.unknownOfSlot[static_cast<size_t>(
-          coarseBox.slot(c.x + static_cast<int>(k % 3) - 1, c.y + static_cast<int>(k / 3) - 1))];
-      if (v < 0) {  // a coarse parent is missing: not a column of this shape
-        out.clear();
-        return false;
-      }
-      out.emplace_back(v, coarseSum[k]);
-    }
-    return true;
-  };
-  return latticeProduct(fine, coarse, rowOf, interiorColumn);
+  return latticeProduct(fine, coarse, rowOf, InteriorColumns<T>(fine, coarse, rows));
 }
 
 template Sparse galerkinFromLevel<float>(const GridLevel&, const LevelSystem&,
