@@ -470,8 +470,8 @@ void TexelOperators::Impl::assembleSeams(std::span<const SeamPiece> pieces, cons
     return columns ? ColumnSlice{columns->of(column), mass.outerIndexPtr()[column]}
                    : ColumnSlice{whole, 0};
   };
-  auto massEntry = [&](int column) { return sliceOf(massColumns, massOut, column); };
-  auto stiffnessEntry = [&](int column) { return sliceOf(stiffnessColumns, stiffnessOut, column); };
+  auto massSlice = [&](int column) { return sliceOf(massColumns, massOut, column); };
+  auto stiffnessSlice = [&](int column) { return sliceOf(stiffnessColumns, stiffnessOut, column); };
   std::vector<double> combined;
   for (const SeamPiece& sp : pieces) {
     const int k = sp.texelEnd - sp.texelBegin;
@@ -479,13 +479,13 @@ void TexelOperators::Impl::assembleSeams(std::span<const SeamPiece> pieces, cons
     const double* v = values + sp.valueBegin;
     const int packed = k * (k + 1) / 2;
     if (massOut || massColumns)
-      scatter(mass, texels + sp.texelBegin, k, PackedSymmetric{v}, f.mass, massEntry);
+      scatter(mass, texels + sp.texelBegin, k, PackedSymmetric{v}, f.mass, massSlice);
     if (stiffnessOut || stiffnessColumns) {
       combined.resize(static_cast<size_t>(packed));
       for (int i = 0; i < packed; ++i)
         combined[i] = f.xx * v[packed + i] + f.xy * v[2 * packed + i] + f.yy * v[3 * packed + i];
       scatter(mass, texels + sp.texelBegin, k, PackedSymmetric{combined.data()},
-              beta ? beta[grid.cellIndex(sp.cellX, sp.cellY)] : 1.0, stiffnessEntry);
+              beta ? beta[grid.cellIndex(sp.cellX, sp.cellY)] : 1.0, stiffnessSlice);
     }
   }
 }

@@ -163,7 +163,7 @@ SolveReport conjugateGradientFrom(const CgOperator<Scalar, Iterate>& a,
   requireFinite(r, "the right-hand side");
   requireFinite(x, "the initial guess");
   SolveReport report;
-  const double bNorm = r.norm();
+  const double bNorm = std::sqrt(columnDots(r, r).sum());
   const double scale = bNorm > 0.0 ? 1.0 / bNorm : 1.0;
   // w holds A p until x and r have taken their step, then M⁻¹ r until p has taken it: one block
   // for both (the classic four work vectors in three).
@@ -189,7 +189,7 @@ SolveReport conjugateGradientFrom(const CgOperator<Scalar, Iterate>& a,
   Eigen::RowVectorXd rz = columnDots(r, w);
   for (Eigen::Index c = 0; c < x.cols(); ++c)
     requirePositive(rz(c), !r.col(c).isZero(0.0), "r^T z", "the preconditioner", c, -1);
-  report.residuals.push_back(r.norm() * scale);
+  report.residuals.push_back(std::sqrt(columnDots(r, r).sum()) * scale);
   requireFinite(r, "the residual of the initial guess (A holds non-finite values)");
   // The iterate with the smallest residual, returned if the residual then diverges. While the
   // residuals fall that is the current iterate, so it is copied (one n x k block) only once

@@ -339,9 +339,11 @@ class InteriorRows {
 /// Column j of A^1 = Pᵀ A P where every child of coarse texel j has an interior row, formed as
 /// galerkinColumns forms it but with the fine entries in the 5 x 5 window around j's centre
 /// child and the coarse ones in the 3 x 3 window around j, positions known from the lattice: no
-/// accumulator's hashing, no sort, no point lookups. The same sums in the same order (children
-/// by fine index, each row's entries in the order of its rowOf, fine entries in the order first
-/// touched), so the same bits. Other columns are left to galerkinColumns (returns false).
+/// accumulator's hashing, no sort, one point lookup per column. The same sums in the same order
+/// (children by fine index, each row's entries in the order of its rowOf, fine entries in the
+/// order first touched), so the same bits, as unknowns number a box's texels row by row (the
+/// TexelGrid's order at level 0, slot order above). Other columns are left to galerkinColumns
+/// (returns false).
 template <typename T>
 class InteriorColumns {
  public:
@@ -438,7 +440,7 @@ class InteriorColumns {
 template <typename T>
 Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
                          std::span<const T> stencils, std::span<const T> rowSums,
-                         const GridLevel& coarse) {
+                         const GridLevel& coarse, bool interiorShortcut) {
   if (stencils.size() != static_cast<size_t>(system.stencilSize) ||
       rowSums.size() != static_cast<size_t>(fine.slotCount) ||
       system.boundaryRows.ptr.size() != static_cast<size_t>(system.boundaryCount()) + 1)
@@ -472,15 +474,16 @@ Sparse galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
       f(v, boundary.val[static_cast<size_t>(e)] + (v == r ? rounding : 0.0));
     }
   };
+  if (!interiorShortcut) return latticeProduct(fine, coarse, rowOf);
   return latticeProduct(fine, coarse, rowOf, InteriorColumns<T>(fine, coarse, rows));
 }
 
 template Sparse galerkinFromLevel<float>(const GridLevel&, const LevelSystem&,
                                          std::span<const float>, std::span<const float>,
-                                         const GridLevel&);
+                                         const GridLevel&, bool);
 template Sparse galerkinFromLevel<double>(const GridLevel&, const LevelSystem&,
                                           std::span<const double>, std::span<const double>,
-                                          const GridLevel&);
+                                          const GridLevel&, bool);
 
 }  // namespace detail
 }  // namespace texgrad

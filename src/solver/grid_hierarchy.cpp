@@ -186,9 +186,15 @@ Eigen::SparseMatrix<double> buildProlongation(const GridLevel& fine, const GridL
 
 LatticePoint GridLevel::pointOfSlot(int64_t s) const {
   // The boxes' slot ranges are consecutive: the box of s is the last one starting at or before s,
-  // found from the box of s's page onwards (most pages lie in one box).
-  auto b = static_cast<size_t>(boxOfSlotPage[static_cast<size_t>(s >> kSlotPageBits)]);
-  while (b + 1 < boxes.size() && boxes[b + 1].offset <= s) ++b;
+  // searched for between the boxes of s's page's first slot and of the next page's (most pages
+  // lie in one box; a page of a coarse level can span many small ones).
+  const auto page = static_cast<size_t>(s >> kSlotPageBits);
+  const auto first = boxes.begin() + boxOfSlotPage[page];
+  const auto last =
+      page + 1 < boxOfSlotPage.size() ? boxes.begin() + boxOfSlotPage[page + 1] + 1 : boxes.end();
+  const auto after = std::upper_bound(
+      first, last, s, [](int64_t slot, const GridBox& box) { return slot < box.offset; });
+  const auto b = static_cast<size_t>(after - 1 - boxes.begin());
   const GridBox& box = boxes[b];
   // Quotient and remainder of the slot's place in its box by the box's width through the
   // width's reciprocal, exact for 32-bit operands (Lemire, Kaser & Kurz, "Faster remainder by

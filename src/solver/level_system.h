@@ -225,10 +225,12 @@ void assignStencils(const GridLevel& level, const SparseSum& a, const LevelSyste
 /// the small screening part that nearly singular systems hinge on. Equals galerkinProduct(A^l,
 /// fine, coarse) in pattern when every row of A^l stores its diagonal (galerkin.cpp says why),
 /// and for T = double in value up to the order of the sums. Defined in galerkin.cpp: one product
-/// kernel.
+/// kernel. `interiorShortcut` false forms every column the general way (the shortcut for
+/// columns whose children all have interior rows gives the same bits; a test compares them).
 template <typename T>
 Eigen::SparseMatrix<double> galerkinFromLevel(const GridLevel& fine, const LevelSystem& system,
                                               std::span<const T> stencils,
-                                              std::span<const T> rowSums, const GridLevel& coarse);
+                                              std::span<const T> rowSums, const GridLevel& coarse,
+                                              bool interiorShortcut = true);
 
 }  // namespace texgrad::detail

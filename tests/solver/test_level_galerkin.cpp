@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <span>
 #include <vector>
@@ -64,10 +65,12 @@ detail::LevelSystem boundaryAssigned(const GridLevel& fine, const Eigen::SparseM
   return system;
 }
 
-/// Level 0's data assigned from `a` as the multigrid set-up does, then A^1 from them.
+/// Level 0's data assigned from `a` as the multigrid set-up does, then A^1 from them (with the
+/// shortcut for interior columns unless `interiorShortcut` is false).
 template <typename T>
 Eigen::SparseMatrix<double> coarseFromLevelData(const GridHierarchy& h,
-                                                const Eigen::SparseMatrix<double>& a) {
+                                                const Eigen::SparseMatrix<double>& a,
+                                                bool interiorShortcut = true) {
   const GridLevel& fine = h.level(0);
   const detail::LevelSystem system = boundaryAssigned(fine, a);
   PageArray<T> stencils;
@@ -76,7 +79,16 @@ Eigen::SparseMatrix<double> coarseFromLevelData(const GridHierarchy& h,
   EXPECT_GT(system.boundaryCount(), 0);
   return detail::galerkinFromLevel<T>(fine, system,
                                       std::span<const T>(stencils.data(), stencils.size()),
-                                      rowSumsOf<T>(fine, a), h.level(1));
+                                      rowSumsOf<T>(fine, a), h.level(1), interiorShortcut);
+}
+
+/// True if a and b hold the same entries, bit for bit.
+bool sameBits(const Eigen::SparseMatrix<double>& a, const Eigen::SparseMatrix<double>& b) {
+  const auto n = static_cast<size_t>(a.nonZeros());
+  return a.rows() == b.rows() && a.cols() == b.cols() && a.nonZeros() == b.nonZeros() &&
+         std::equal(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1, b.outerIndexPtr()) &&
+         std::equal(a.innerIndexPtr(), a.innerIndexPtr() + n, b.innerIndexPtr()) &&
+         std::memcmp(a.valuePtr(), b.valuePtr(), n * sizeof(double)) == 0;
 }
 
 /// Expects c to have reference's pattern and, per column j, |c_ij - r_ij| <= tolerance *
@@ -145,6 +157,23 @@ TEST(LevelGalerkin, CoarseOperatorFromLevelDataEqualsTheProductOfA0) {
         for (Eigen::SparseMatrix<double>::InnerIterator it(asymmetry, k); it; ++it)
           EXPECT_LE(std::abs(it.value()), kSumRounding * magnitudes(k))
               << "entries (" << it.row() << ", " << k << ") and (" << k << ", " << it.row() << ")";
+    }
+}
+
+TEST(LevelGalerkin, InteriorColumnShortcutGivesTheGeneralPathsBits) {
+  // The shortcut for coarse columns whose children all have interior rows sums in the general
+  // path's order: the same bits, with and without absent neighbours, in float and double.
+  const test::SyntheticProblem p = test::multiChartProblem(12);
+  const GridHierarchy h = GridHierarchy::build(p.grid, 4, 16);
+  for (const bool thin : {false, true})
+    for (const double alpha : {1e4, 1e-2}) {
+      SCOPED_TRACE(::testing::Message() << "alpha " << alpha << (thin ? ", thinned" : ""));
+      const Eigen::SparseMatrix<double> full = p.system(alpha);
+      const Eigen::SparseMatrix<double> a = thin ? thinned(full, h.level(0)) : full;
+      EXPECT_TRUE(sameBits(coarseFromLevelData<float>(h, a, true),
+                           coarseFromLevelData<float>(h, a, false)));
+      EXPECT_TRUE(sameBits(coarseFromLevelData<double>(h, a, true),
+                           coarseFromLevelData<double>(h, a, false)));
     }
 }
 

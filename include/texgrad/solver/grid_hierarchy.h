@@ -25,8 +25,8 @@ struct GridBox {
   int x0 = 0, y0 = 0;         ///< level-lattice coordinates of the box's slot (0, 0)
   int width = 0, height = 0;  ///< size in slots, ring included
   int64_t offset = 0;         ///< index of slot (0, 0) in the level's slot arrays
-  /// ceil(2^64 / width) (0 until set): divides by the width with two multiplications
-  /// (GridLevel::pointOfSlot).
+  /// ceil(2^64 / width), set by GridHierarchy with the box: divides by the width with two
+  /// multiplications (GridLevel::pointOfSlot).
   uint64_t widthReciprocal = 0;
   /// Slot index of level-lattice position (x, y), which must lie in the box.
   int64_t slot(int x, int y) const {
@@ -53,7 +53,8 @@ struct GridLevel {
   std::vector<int32_t> boxOfChart;     ///< per chart: index into boxes, -1 if absent
   /// Slots per page of boxOfSlotPage, as a power of two.
   static constexpr int kSlotPageBits = 10;
-  /// Per page of 2^kSlotPageBits slots: the box (index into boxes) of its first slot.
+  /// Per page of 2^kSlotPageBits slots: the box (index into boxes) of its first slot; set by
+  /// GridHierarchy with the boxes (pointOfSlot reads it).
   std::vector<int32_t> boxOfSlotPage;
   int64_t slotCount = 0;               ///< total slots over all boxes (< 2^31)
   /// Per slot: unknown index or -1 (the inverse of slotOfUnknown). Only a set-up reads it: a
