@@ -1,7 +1,6 @@
 // TexelUnknowns: the active texels' bitmask and the running count per 64-texel word.
 #include "texgrad/lattice/texel_unknowns.h"
 
-#include <bit>
 #include <limits>
 #include <string>
 
@@ -26,7 +25,7 @@ TexelUnknowns::TexelUnknowns(size_t texels, std::span<const int32_t> active)
   int32_t count = 0;
   for (size_t w = 0; w < bits_.size(); ++w) {
     before_[w] = count;
-    count += std::popcount(bits_[w]);
+    count += bitsSet(bits_[w]);
   }
 }
 

@@ -37,20 +37,41 @@ Eigen::RowVectorXd columnDots(const U& u, const V& v) {
   return dots;
 }
 
-/// u += v step, column c by step(c), on all cores; returns the squared norm over all columns
-/// of v alpha (with `alpha`: the step in double) or, without, of the updated u, in double.
-template <typename U, typename V>
-double addScaled(U& u, const V& v, const Eigen::Matrix<typename U::Scalar, 1, Eigen::Dynamic>& step,
-                 const Eigen::RowVectorXd* alpha = nullptr) {
-  using Iterate = typename U::Scalar;
-  return sumOverRows(u.rows(), [&](int64_t begin, int64_t end) {
+/// The Frobenius norm of an n x k block, accumulated in double on all cores (sumOverRows).
+template <typename M>
+double normOf(const M& m) {
+  return std::sqrt(columnDots(m, m).sum());
+}
+
+/// r -= w step, column c by step(c), on all cores; returns |r|^2 after it, in double.
+template <typename R, typename W>
+double subtractStep(R& r, const W& w,
+                    const Eigen::Matrix<typename R::Scalar, 1, Eigen::Dynamic>& step) {
+  using Iterate = typename R::Scalar;
+  return sumOverRows(r.rows(), [&](int64_t begin, int64_t end) {
     double acc = 0.0;
-    for (Eigen::Index c = 0; c < u.cols(); ++c)
+    for (Eigen::Index c = 0; c < r.cols(); ++c)
       for (int64_t i = begin; i < end; ++i) {
-        u(i, c) += static_cast<Iterate>(v(i, c)) * step(c);
-        const double term =
-            alpha ? static_cast<double>(v(i, c)) * (*alpha)(c) : static_cast<double>(u(i, c));
-        acc += term * term;
+        r(i, c) -= static_cast<Iterate>(w(i, c)) * step(c);
+        acc += static_cast<double>(r(i, c)) * static_cast<double>(r(i, c));
+      }
+    return acc;
+  });
+}
+
+/// x += p step, column c by step(c) (alpha(c) rounded), on all cores; returns |p alpha|^2 of the
+/// step in double, alpha unrounded.
+template <typename X, typename P>
+double addStep(X& x, const P& p, const Eigen::Matrix<typename X::Scalar, 1, Eigen::Dynamic>& step,
+               const Eigen::RowVectorXd& alpha) {
+  using Iterate = typename X::Scalar;
+  return sumOverRows(x.rows(), [&](int64_t begin, int64_t end) {
+    double acc = 0.0;
+    for (Eigen::Index c = 0; c < x.cols(); ++c)
+      for (int64_t i = begin; i < end; ++i) {
+        x(i, c) += static_cast<Iterate>(p(i, c)) * step(c);
+        const double change = static_cast<double>(p(i, c)) * alpha(c);
+        acc += change * change;
       }
     return acc;
   });
@@ -163,7 +184,7 @@ SolveReport conjugateGradientFrom(const CgOperator<Scalar, Iterate>& a,
   requireFinite(r, "the right-hand side");
   requireFinite(x, "the initial guess");
   SolveReport report;
-  const double bNorm = std::sqrt(columnDots(r, r).sum());
+  const double bNorm = normOf(r);
   const double scale = bNorm > 0.0 ? 1.0 / bNorm : 1.0;
   // w holds A p until x and r have taken their step, then M⁻¹ r until p has taken it: one block
   // for both (the classic four work vectors in three).
@@ -189,7 +210,7 @@ SolveReport conjugateGradientFrom(const CgOperator<Scalar, Iterate>& a,
   Eigen::RowVectorXd rz = columnDots(r, w);
   for (Eigen::Index c = 0; c < x.cols(); ++c)
     requirePositive(rz(c), !r.col(c).isZero(0.0), "r^T z", "the preconditioner", c, -1);
-  report.residuals.push_back(std::sqrt(columnDots(r, r).sum()) * scale);
+  report.residuals.push_back(normOf(r) * scale);
   requireFinite(r, "the residual of the initial guess (A holds non-finite values)");
   // The iterate with the smallest residual, returned if the residual then diverges. While the
   // residuals fall that is the current iterate, so it is copied (one n x k block) only once
@@ -209,10 +230,9 @@ SolveReport conjugateGradientFrom(const CgOperator<Scalar, Iterate>& a,
       alpha(c) = pap(c) > 0.0 ? rz(c) / pap(c) : 0.0;
     }
     const Eigen::Matrix<Iterate, 1, Eigen::Dynamic> step = alpha.template cast<Iterate>();
-    const Eigen::Matrix<Iterate, 1, Eigen::Dynamic> minusStep = -step;
-    const double residual = std::sqrt(addScaled(r, w, minusStep)) * scale;  // r -= A p alpha
+    const double residual = std::sqrt(subtractStep(r, w, step)) * scale;  // r -= A p alpha
     if (residual >= bestResidual && best.size() == 0) best = x.template cast<Scalar>();
-    const double change = addScaled(x, p, step, &alpha);  // x += p alpha
+    const double change = addStep(x, p, step, alpha);  // x += p alpha
     report.rmsChange.push_back(std::sqrt(change) /
                                std::sqrt(std::max<double>(1.0, double(p.size()))));
     report.times.other += secondsSince(start);

@@ -323,8 +323,7 @@ class InteriorRows {
   }
   /// True if slot s holds an interior unknown.
   bool interior(int64_t s) const {
-    return level_.unknownOfSlot[static_cast<size_t>(s)] >= 0 &&
-           system_.kind[static_cast<size_t>(s)] == SlotKind::Interior;
+    return system_.kind[static_cast<size_t>(s)] == SlotKind::Interior;  // Empty without one
   }
 
  private:
